@@ -1,0 +1,42 @@
+# Two commands do everything on a fresh machine with python3 (3.11+) and make:
+#   make demo   - create .venv, install, solve the built-in 30-subtask case, write figures
+#   make test   - create .venv with the dev extras if needed, run all tests and notebooks
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+OUT := out
+
+.PHONY: demo test bench lint clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $@ $(VENV)/.installed
+
+$(VENV)/.installed-bench: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e '.[dev,bench]'
+	touch $@ $(VENV)/.installed-dev $(VENV)/.installed
+
+demo: $(VENV)/.installed
+	MPLBACKEND=Agg $(BIN)/subtask-opt solve --case random30 --seed 1 \
+		--json $(OUT)/random30.json --plot $(OUT)/random30.png
+	@echo "figures and JSON written to $(OUT)/"
+
+test: $(VENV)/.installed-dev
+	MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests examples
+
+bench: $(VENV)/.installed-bench
+	$(BIN)/python benchmarks/sequencing.py
+
+lint: $(VENV)/.installed-dev
+	$(BIN)/ruff check subtask_opt tests benchmarks
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache

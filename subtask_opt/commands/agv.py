@@ -1,0 +1,9 @@
+"""CLI commands for the agv planners (registered by :func:`register`)."""
+
+from __future__ import annotations
+
+import argparse
+
+
+def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``plan agv`` and its benchmarks (not built yet)."""

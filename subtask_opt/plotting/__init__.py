@@ -1,0 +1,1 @@
+"""Matplotlib figures, one module per family; nothing outside this package imports matplotlib."""

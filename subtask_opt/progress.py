@@ -1,0 +1,30 @@
+"""Progress bars for long runs (tqdm, shown only once a run passes one second)."""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+
+class _NoBar:
+    def update(self, n: int = 1) -> None: ...
+
+    def set_postfix_str(self, s: str) -> None: ...
+
+    def close(self) -> None: ...
+
+    def __enter__(self) -> _NoBar:
+        return self
+
+    def __exit__(self, *exc: Any) -> None: ...
+
+
+def progress_bar(enabled: bool, *, total: int | None = None, desc: str = "",
+                 unit: str = "it") -> Any:
+    """A tqdm bar on stderr that appears after 1 s, or a no-op when disabled."""
+    if not enabled:
+        return _NoBar()
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, unit=unit, delay=1.0, file=sys.stderr, leave=False,
+                dynamic_ncols=True)

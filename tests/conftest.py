@@ -1,0 +1,22 @@
+"""Shared test fixtures: a headless matplotlib and the shared benchmark data."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
+SHARED_DATA = PROJECT_ROOT.parent / "shared" / "data"
+
+
+@pytest.fixture(scope="session")
+def movingai_dir() -> Path:
+    """The MovingAI maps and scenarios in ../shared/data/movingai (see README)."""
+    path = SHARED_DATA / "movingai"
+    if not path.is_dir():
+        pytest.skip(f"shared benchmark data not found at {path}")
+    return path
