@@ -3,7 +3,129 @@
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
+
+from ._common import non_negative_int, positive_float, positive_int, write_json
 
 
 def register(root: argparse._SubParsersAction) -> None:
-    """Add ``solve`` (not built yet)."""
+    """Add the ``solve`` command."""
+    p = root.add_parser(
+        "solve",
+        help="order subtasks for minimum total travel time",
+        description="Find the order of subtasks that minimises the arm's total travel time "
+                    "(closed tour), print it with a per-leg table, optionally write JSON "
+                    "and figures.",
+    )
+    p.add_argument("--case", required=True, metavar="square20|random30|PATH",
+                   help="built-in case or a CSV (header x,y[,theta]) / JSON file of subtasks")
+    p.add_argument("--case-seed", type=non_negative_int, default=0, metavar="N",
+                   help="seed of the random30 generator (default 0)")
+    p.add_argument("--robot", default="planar_2r", metavar="planar_2r|asr_twodof|PATH.urdf",
+                   help="robot model (default planar_2r)")
+    p.add_argument("--time-model", default="trapezoid", metavar="MODEL",
+                   help="paper | trapezoid | joint (default trapezoid)")
+    p.add_argument("--k", type=float, default=0.1,
+                   help="via-point fraction of the paper time model (default 0.1)")
+    p.add_argument("--elbow", type=int, default=0, choices=(0, 1),
+                   help="IK branch used at every subtask (default 0)")
+    p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
+                   help="index of the subtask the tour starts and ends at")
+    p.add_argument("--preset", default="default", choices=("default", "paper"),
+                   help="solver preset (default: micro-GA with local search)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="solver seed (default 0)")
+    stop = p.add_argument_group("stopping (any criterion given stops the run)")
+    stop.add_argument("--max-generations", type=positive_int, metavar="N")
+    stop.add_argument("--max-runtime", type=positive_float, metavar="SECONDS")
+    stop.add_argument("--no-improvement", type=positive_int, metavar="N",
+                      help="stop after N generations without a better tour")
+    stop.add_argument("--target", type=float, metavar="SECONDS",
+                      help="stop once the total time is at most this")
+    out = p.add_argument_group("output")
+    out.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
+    out.add_argument("--plot", metavar="OUT.png",
+                     help="write the tour over the workspace and the convergence plot")
+    out.add_argument("--quiet", action="store_true", help="print only the summary")
+    p.set_defaults(handler=run)
+
+
+def _stop_criteria(args: argparse.Namespace) -> list | None:
+    from ..stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
+
+    criteria: list = []
+    if args.max_generations is not None:
+        criteria.append(MaxGenerations(args.max_generations))
+    if args.max_runtime is not None:
+        criteria.append(MaxRuntime(args.max_runtime))
+    if args.no_improvement is not None:
+        criteria.append(NoImprovement(args.no_improvement))
+    if args.target is not None:
+        criteria.append(TargetCost(args.target))
+    return criteria or None
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..arm import load_arm
+    from ..sequencing import SequencingProblem, SolverParams, solve
+    from ..tasks import CASE_NAMES, builtin_case, load_subtasks
+
+    arm = load_arm(args.robot)
+    if args.case in CASE_NAMES:
+        subtasks = builtin_case(args.case, arm, seed=args.case_seed)
+    else:
+        subtasks = load_subtasks(Path(args.case))
+    problem = SequencingProblem(subtasks, arm, time_model=args.time_model, first=args.first,
+                                k=args.k, elbow=args.elbow)
+    stop = _stop_criteria(args)
+    if stop is not None and all(type(c).__name__ == "TargetCost" for c in stop):
+        stop = stop + SolverParams(preset=args.preset).default_stop()
+    result = solve(problem, seed=args.seed, stop=stop, params=SolverParams(preset=args.preset),
+                   progress=sys.stderr.isatty())
+    print(result.summary())
+    if not args.quiet:
+        print(format_leg_table(result, problem))
+    _warn_infeasible(result)
+    if args.json:
+        payload = result.to_dict()
+        payload["case"] = args.case
+        payload["points"] = problem.subtasks.points.tolist()
+        write_json(args.json, payload)
+        print(f"wrote {args.json}")
+    if args.plot:
+        from ..plotting.sequencing import save_solution_figure
+
+        save_solution_figure(result, problem, args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def format_leg_table(result, problem) -> str:
+    """One row per leg: from, to, distance, time, and the joint-limit check."""
+    pts = problem.subtasks.points
+    check = problem.timing.leg_check
+    rows = [f"{'leg':>4} {'from':>5} {'to':>5} {'dist [m]':>9} {'time [s]':>9}  joint check"]
+    n = len(result.order)
+    for i in range(n):
+        a, b = int(result.order[i]), int(result.order[(i + 1) % n])
+        dist = float(((pts[a] - pts[b]) ** 2).sum() ** 0.5)
+        note = ""
+        if check is not None:
+            if check.outside_annulus[a, b]:
+                note = "line leaves the workspace"
+            elif check.speed_ratio[a, b] > 1.0:
+                note = f"joint speed x{check.speed_ratio[a, b]:.2f} over limit"
+        rows.append(f"{i:>4} {a:>5} {b:>5} {dist:>9.4f} {result.leg_times[i]:>9.4f}  {note}")
+    return "\n".join(rows)
+
+
+def _warn_infeasible(result) -> None:
+    info = result.infeasible_legs
+    if not info:
+        return
+    n_out = info.get("n_infeasible", 0)
+    n_fast = info.get("n_overspeed", 0)
+    if n_out or n_fast:
+        print(f"warning: of all straight-line legs, {n_out} leave the reachable workspace and "
+              f"{n_fast} exceed a joint speed limit (worst x{info.get('worst_ratio', 0):.2f}); "
+              "use --time-model joint for times the arm can achieve", file=sys.stderr)

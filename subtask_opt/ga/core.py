@@ -3,7 +3,8 @@
 A chromosome is a row of an int64 matrix plus a length, so fixed-length
 permutations (the sequencing TSP) and variable-length waypoint lists (the GA
 path planner) share one representation and one loop. What differs between
-them are five operators, numba functions passed in as first-class values:
+them are five numba operators, registered per chromosome type in
+:mod:`subtask_opt.ga.registry`, with these signatures:
 
 ``randomize(genes_out, data, aux, rng, best, best_len) -> length``
     A new individual for the initial population (``best_len == 0``) and for a
@@ -19,10 +20,11 @@ them are five operators, numba functions passed in as first-class values:
     In-place local search (the identity for a plain GA).
 
 ``data`` (2-D float64) and ``aux`` (1-D float64) carry the problem; their
-meaning belongs to the operators. The loop is generational with elitism; it
-restarts the population (best + fresh individuals) when it has converged, if
-configured to, which is the micro-GA of Krishnakumar that the sequencing paper
-uses.
+meaning belongs to the operators.
+
+The loop is generational with elitism; it restarts the population (best +
+fresh individuals) when it has converged, if configured to, which is the
+micro-GA of Krishnakumar that the sequencing paper uses.
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ from ..stop import (
     StoppingCriterion,
     target_threshold,
 )
+from . import registry as ops
+from .registry import OperatorSet
 
 # Layout of the float64 ``cfg`` array the kernel reads.
 _CFG_ELITE, _CFG_PCROSS, _CFG_PMUT, _CFG_RESTART, _CFG_CONV_TOL, _CFG_TOURNAMENT, _CFG_HORIZON = (
@@ -51,17 +55,6 @@ _CFG_SIZE = 7
 
 # Layout of the int64 ``counters`` array (the loop's state between chunks).
 _GEN, _LAST_IMPROVE, _RESTARTS, _BEST_LEN = range(4)
-
-
-@dataclass(frozen=True)
-class Operators:
-    """The five numba operators that define a chromosome type (see module doc)."""
-
-    randomize: Callable
-    evaluate: Callable
-    crossover: Callable
-    mutate: Callable
-    improve: Callable
 
 
 @dataclass(frozen=True)
@@ -183,7 +176,7 @@ def _population_converged(costs, previous_costs, tol):
 
 
 @njit(cache=True)
-def _reseed(pop, lengths, costs, best, counters, data, aux, rng, randomize, evaluate, improve):
+def _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng):
     """Best so far in slot 0 and fresh individuals elsewhere.
 
     Only the initial population (no best yet) is polished with ``improve``:
@@ -194,19 +187,17 @@ def _reseed(pop, lengths, costs, best, counters, data, aux, rng, randomize, eval
     if best_len > 0:
         pop[0, :best_len] = best[:best_len]
         lengths[0] = best_len
-        costs[0] = evaluate(pop[0], best_len, data, aux)
+        costs[0] = ops.evaluate(kind, pop[0], best_len, data, aux)
         first = 1
     for i in range(first, pop.shape[0]):
-        lengths[i] = randomize(pop[i], data, aux, rng, best, best_len)
-        if best_len == 0:
-            lengths[i] = improve(pop[i], lengths[i], data, aux)
-        costs[i] = evaluate(pop[i], lengths[i], data, aux)
+        lengths[i] = ops.randomize(kind, pop[i], data, aux, rng, best, best_len)
+        lengths[i] = ops.improve(kind, pop[i], lengths[i], data, aux)
+        costs[i] = ops.evaluate(kind, pop[i], lengths[i], data, aux)
 
 
 @njit(cache=True)
-def evolve(pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
-           n_gens, stall_limit, target, hist_best, hist_mean, hist_restart,
-           randomize, evaluate, crossover, mutate, improve):
+def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
+           n_gens, stall_limit, target, hist_best, hist_mean, hist_restart):
     """Run up to ``n_gens`` generations in place; return how many ran.
 
     The first call (no best recorded yet) builds the initial population.
@@ -226,7 +217,7 @@ def evolve(pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
     new_lengths = np.empty(n_pop, dtype=lengths.dtype)
     new_costs = np.empty(n_pop)
     if counters[_BEST_LEN] == 0:  # first call: build the initial population
-        _reseed(pop, lengths, costs, best, counters, data, aux, rng, randomize, evaluate, improve)
+        _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng)
         i_best = np.argmin(costs)
         counters[_BEST_LEN] = lengths[i_best]
         best[: lengths[i_best]] = pop[i_best, : lengths[i_best]]
@@ -246,15 +237,16 @@ def evolve(pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
             a, b = _pick_pair(costs, tournament, rng)
             child = new_pop[c]
             if p_cross >= 1.0 or rng.random() < p_cross:
-                length = crossover(pop[a], lengths[a], pop[b], lengths[b], data, aux, rng, child)
+                length = ops.crossover(kind, pop[a], lengths[a], pop[b], lengths[b], data, aux,
+                                       rng, child)
             else:
                 child[: lengths[a]] = pop[a, : lengths[a]]
                 length = lengths[a]
             if p_mut > 0.0 and rng.random() < p_mut:
-                length = mutate(child, length, data, aux, rng, strength)
-            length = improve(child, length, data, aux)
+                length = ops.mutate(kind, child, length, data, aux, rng, strength)
+            length = ops.improve(kind, child, length, data, aux)
             new_lengths[c] = length
-            new_costs[c] = evaluate(child, length, data, aux)
+            new_costs[c] = ops.evaluate(kind, child, length, data, aux)
         converged = restart and _population_converged(new_costs, costs, conv_tol)
         pop[:, :] = new_pop
         lengths[:] = new_lengths
@@ -270,8 +262,7 @@ def evolve(pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
         hist_mean[step] = np.mean(costs)
         hist_restart[step] = 0
         if converged:
-            _reseed(pop, lengths, costs, best, counters, data, aux, rng, randomize, evaluate,
-                    improve)
+            _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng)
             counters[_RESTARTS] += 1
             hist_restart[step] = 1
         ran += 1
@@ -279,7 +270,7 @@ def evolve(pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
 
 
 def run_ga(
-    operators: Operators,
+    operators: OperatorSet,
     config: GAConfig,
     data: np.ndarray,
     aux: np.ndarray,
@@ -326,10 +317,8 @@ def run_ga(
         n_gens = min(n_gens, chunk_cap)
         hb, hm, hr = np.empty(n_gens), np.empty(n_gens), np.empty(n_gens, dtype=np.int64)
         t0 = time.perf_counter()
-        ran = evolve(pop, lengths, costs, best, best_cost, counters, data, aux, cfg, rng,
-                     n_gens, stall_limit, target, hb, hm, hr,
-                     operators.randomize, operators.evaluate, operators.crossover,
-                     operators.mutate, operators.improve)
+        ran = evolve(operators.kind, pop, lengths, costs, best, best_cost, counters, data,
+                     aux, cfg, rng, n_gens, stall_limit, target, hb, hm, hr)
         hist_best.append(hb[:ran])
         hist_mean.append(hm[:ran])
         hist_restart.append(hr[:ran])

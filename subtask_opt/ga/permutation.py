@@ -1,9 +1,17 @@
 """Permutation chromosomes for the travelling-salesman problem of sequencing.
 
-``data`` is the N x N travel-time matrix (any, not necessarily symmetric);
-a chromosome is a closed tour, a permutation of 0..N-1. ``aux[0]`` selects the
-greedy-crossover fallback when both parents' next cities are already used:
-0 picks an unvisited city at random (the paper), 1 the nearest one.
+``data`` is the N x N travel-time matrix; a chromosome is a closed tour, a
+permutation of 0..N-1. ``aux`` holds the operator parameters (see
+:func:`make_aux`):
+
+* ``aux[AUX_FALLBACK]`` - greedy-crossover fallback when both parents' next
+  cities are used: 0 picks an unvisited city at random (the paper), 1 the
+  nearest one;
+* ``aux[AUX_GRASP]`` - share of restart individuals built by randomised
+  nearest neighbour rather than by a double-bridge kick of the best tour;
+* ``aux[AUX_MAX_SEGMENT]`` - longest run Or-opt moves;
+* ``aux[AUX_NEIGHBOURS]`` = K, followed by the N x K table of each city's K
+  nearest cities (row-major), used by the fast local search.
 """
 
 from __future__ import annotations
@@ -11,10 +19,23 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .core import Operators
-
 FALLBACK_RANDOM = 0.0
 FALLBACK_NEAREST = 1.0
+AUX_FALLBACK, AUX_GRASP, AUX_MAX_SEGMENT, AUX_NEIGHBOURS = range(4)
+_AUX_TABLE = 4
+
+
+def make_aux(matrix: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.5,
+             max_segment: int = 3, neighbours: int = 8) -> np.ndarray:
+    """Pack the operator parameters and the nearest-neighbour table into ``aux``."""
+    n = matrix.shape[0]
+    k = max(1, min(neighbours, n - 1))
+    closeness = np.minimum(matrix, matrix.T).astype(float)
+    np.fill_diagonal(closeness, np.inf)
+    table = np.argsort(closeness, axis=1, kind="stable")[:, :k]
+    head = [FALLBACK_NEAREST if nearest_fallback else FALLBACK_RANDOM, grasp_share,
+            float(max_segment), float(k)]
+    return np.concatenate([np.array(head), table.astype(float).ravel()])
 
 
 @njit(cache=True)
@@ -39,19 +60,28 @@ def random_tour(genes, data, aux, rng, best, best_len):
 
 @njit(cache=True)
 def nearest_neighbour_tour(genes, data, rng):
-    """Nearest-neighbour tour from a random first city."""
+    """Randomised nearest-neighbour tour: random first city, then one of the
+    two nearest unvisited cities at each step (a GRASP construction)."""
     n = data.shape[0]
     used = np.zeros(n, dtype=np.bool_)
     current = rng.integers(0, n)
     genes[0] = current
     used[current] = True
     for k in range(1, n):
-        nxt = -1
-        best_d = np.inf
+        first = -1
+        second = -1
+        d1 = np.inf
+        d2 = np.inf
         for c in range(n):
-            if not used[c] and data[current, c] < best_d:
-                best_d = data[current, c]
-                nxt = c
+            if used[c]:
+                continue
+            d = data[current, c]
+            if d < d1:
+                second, d2 = first, d1
+                first, d1 = c, d
+            elif d < d2:
+                second, d2 = c, d
+        nxt = second if second >= 0 and rng.random() < 0.3 else first
         genes[k] = nxt
         used[nxt] = True
         current = nxt
@@ -66,7 +96,7 @@ def kicked_best(genes, data, aux, rng, best, best_len):
     undo in one step, so a restart explores a new basin near a good tour.
     """
     n = data.shape[0]
-    if best_len == 0:
+    if best_len == 0 or rng.random() < aux[AUX_GRASP]:
         return nearest_neighbour_tour(genes, data, rng)
     if n < 8:
         return random_tour(genes, data, aux, rng, best, best_len)
@@ -109,7 +139,7 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     current = genes_a[0] if rng.random() < 0.5 else genes_b[0]
     child[0] = current
     used[current] = True
-    nearest = aux[0] > 0.5
+    nearest = aux[AUX_FALLBACK] > 0.5
     for k in range(1, n):
         na = succ_a[current]
         nb = succ_b[current]
@@ -191,29 +221,31 @@ def _two_opt_pass(tour, n, data, fwd, bwd):
 
 
 @njit(cache=True)
-def _or_opt_pass(tour, n, data, fwd, bwd, scratch):
-    """First-improvement Or-opt: move a run of 1-3 cities elsewhere, either way round."""
+def _or_opt_pass(tour, n, data, fwd, bwd, scratch, max_seg):
+    """One sweep of first-improvement segment insertion (Or-opt generalised).
+
+    Moves a run of 1..max_seg consecutive cities between two other neighbours,
+    either way round: two of the four pure 3-opt reconnections. Costs may be
+    asymmetric. After a move the sweep goes on. True if anything moved.
+    """
     eps = 1e-12
-    for seg in range(1, 4):
-        if seg > n - 3:
-            break
+    moved = False
+    for seg in range(1, max_seg + 1):
         for i in range(n):
+            closing_f = data[tour[n - 1], tour[0]]
+            closing_b = data[tour[0], tour[n - 1]]
             # the run is tour[i .. i+seg-1] (indices mod n); p before it, q after it
+            end = i + seg - 1
             p = tour[(i - 1) % n]
             s0 = tour[i]
-            s1 = tour[(i + seg - 1) % n]
-            q = tour[(i + seg) % n]
-            if i + seg <= n:
-                inner_f = fwd[i + seg - 1] - fwd[i]
-                inner_b = bwd[i + seg - 1] - bwd[i]
-            else:  # the run wraps round the end of the array; sum it directly
-                inner_f = 0.0
-                inner_b = 0.0
-                for k in range(seg - 1):
-                    u = tour[(i + k) % n]
-                    v = tour[(i + k + 1) % n]
-                    inner_f += data[u, v]
-                    inner_b += data[v, u]
+            s1 = tour[end % n]
+            q = tour[(end + 1) % n]
+            if end < n:
+                inner_f = fwd[end] - fwd[i]
+                inner_b = bwd[end] - bwd[i]
+            else:  # the run wraps round the end of the array
+                inner_f = fwd[n - 1] - fwd[i] + closing_f + fwd[end - n]
+                inner_b = bwd[n - 1] - bwd[i] + closing_b + bwd[end - n]
             removed = data[p, s0] + data[s1, q] - data[p, q]
             for k in range(n - seg - 1):
                 # insert between x and y, the k-th edge after q
@@ -236,13 +268,15 @@ def _or_opt_pass(tour, n, data, fwd, bwd, scratch):
                         scratch[m] = tour[(i + seg + t) % n]
                         m += 1
                     tour[:n] = scratch[:n]
-                    return True
-    return False
+                    _prefix_costs(tour, n, data, fwd, bwd)
+                    moved = True
+                    break  # the run at position i changed: go on with the next i
+    return moved
 
 
 @njit(cache=True)
-def local_search(genes, length, data, aux):
-    """2-opt and Or-opt to a local optimum (costs may be asymmetric)."""
+def exact_local_search(genes, length, data, aux):
+    """2-opt and Or-opt to a local optimum, full sweeps; costs may be asymmetric."""
     n = length
     if n < 4:
         return n
@@ -253,25 +287,239 @@ def local_search(genes, length, data, aux):
         _prefix_costs(genes, n, data, fwd, bwd)
         if _two_opt_pass(genes, n, data, fwd, bwd):
             continue
-        if _or_opt_pass(genes, n, data, fwd, bwd, scratch):
+        if _or_opt_pass(genes, n, data, fwd, bwd, scratch, min(int(aux[AUX_MAX_SEGMENT]), n - 3)):
             continue
         return n
 
 
-PAPER_OPERATORS = Operators(
-    randomize=random_tour,
-    evaluate=tour_cost,
-    crossover=greedy_crossover,
-    mutate=no_mutation,
-    improve=no_improvement,
-)
-"""The paper's micro-GA: random restarts, greedy crossover, nothing else."""
+# ---------------------------------------------------------------------------
+# Fast local search for symmetric costs: neighbour lists + a queue of active
+# cities (don't-look bits). Only moves that add an edge to one of a city's K
+# nearest cities, shorter than the edge it removes, are tried.
 
-MEMETIC_OPERATORS = Operators(
-    randomize=kicked_best,
-    evaluate=tour_cost,
-    crossover=greedy_crossover,
-    mutate=no_mutation,
-    improve=local_search,
-)
-"""Our default: greedy crossover + 2-opt/Or-opt polish, restarts kick the best tour."""
+
+@njit(cache=True)
+def _reverse(tour, pos, n, i, j):
+    """Reverse the cyclic run tour[i..j] (or its complement, same cycle)."""
+    length = (j - i) % n + 1
+    if 2 * length > n:  # reversing the complement gives the same cycle, cheaper
+        i, j = (j + 1) % n, (i - 1) % n
+        length = n - length
+    for _ in range(length // 2):
+        a, b = tour[i], tour[j]
+        tour[i], tour[j] = b, a
+        pos[b], pos[a] = i, j
+        i = (i + 1) % n
+        j = (j - 1) % n
+
+
+@njit(cache=True)
+def _move_run(tour, pos, n, i, seg, x_pos, reverse, scratch):
+    """Move the run tour[i..i+seg-1] to just after position x_pos."""
+    m = 0
+    k = (i + seg) % n
+    while True:
+        scratch[m] = tour[k]
+        m += 1
+        if k == x_pos:
+            break
+        k = (k + 1) % n
+    for t in range(seg):
+        scratch[m] = tour[(i + (seg - 1 - t if reverse else t)) % n]
+        m += 1
+    k = (x_pos + 1) % n
+    while m < n:
+        scratch[m] = tour[k]
+        m += 1
+        k = (k + 1) % n
+    for t in range(n):
+        tour[t] = scratch[t]
+        pos[scratch[t]] = t
+
+
+@njit(cache=True)
+def _push(queue, queued, tail, n, city):
+    if not queued[city]:
+        queued[city] = True
+        queue[tail % n] = city
+        tail += 1
+    return tail
+
+
+@njit(cache=True)
+def local_search(genes, length, data, aux):
+    """2-opt and Or-opt to a local optimum for symmetric costs (fast), all cities active."""
+    return local_search_around(genes, length, data, aux, genes[:length].copy(), length)
+
+
+@njit(cache=True)
+def local_search_around(genes, length, data, aux, active, n_active):
+    """2-opt and Or-opt for symmetric costs, starting from the cities ``active[:n_active]``.
+
+    A city whose moves all fail goes idle until a move changes one of its tour
+    neighbours, so polishing a tour that changed in a few places costs little.
+    """
+    n = length
+    if n < 5:
+        return exact_local_search(genes, length, data, aux)
+    k_nb = int(aux[AUX_NEIGHBOURS])
+    max_seg = min(int(aux[AUX_MAX_SEGMENT]), n - 3)
+    eps = 1e-12
+    pos = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        pos[genes[i]] = i
+    queue = np.empty(n, dtype=np.int64)
+    queued = np.zeros(n, dtype=np.bool_)
+    scratch = np.empty(n, dtype=genes.dtype)
+    head = 0
+    tail = 0
+    for i in range(n_active):
+        tail = _push(queue, queued, tail, n, active[i])
+    # Every move lowers the cost when costs are symmetric; the budget only
+    # guarantees termination if a caller breaks that contract.
+    budget = 50 * n * n
+    while head < tail and budget > 0:
+        budget -= 1
+        a = queue[head % n]
+        head += 1
+        queued[a] = False
+        improved = False
+        # 2-opt: new edge (a, c) for c among a's nearest
+        for side in range(2):
+            ia = pos[a]
+            b = genes[(ia + 1) % n] if side == 0 else genes[(ia - 1) % n]
+            d_ab = data[a, b]
+            for t in range(k_nb):
+                c = int(aux[_AUX_TABLE + a * k_nb + t])
+                d_ac = data[a, c]
+                if d_ac >= d_ab - eps:
+                    break
+                ic = pos[c]
+                d = genes[(ic + 1) % n] if side == 0 else genes[(ic - 1) % n]
+                if c == b or d == a:
+                    continue
+                delta = d_ac + data[b, d] - d_ab - data[c, d]
+                if delta < -eps:
+                    if side == 0:  # a b ... c d  ->  a c ... b d
+                        _reverse(genes, pos, n, (ia + 1) % n, ic)
+                    else:  # d c ... b a  ->  d b ... c a
+                        _reverse(genes, pos, n, ic, (ia - 1) % n)
+                    tail = _push(queue, queued, tail, n, a)
+                    tail = _push(queue, queued, tail, n, b)
+                    tail = _push(queue, queued, tail, n, c)
+                    tail = _push(queue, queued, tail, n, d)
+                    improved = True
+                    break
+            if improved:
+                break
+        if improved:
+            continue
+        # Or-opt: a run of 1..max_seg cities starting or ending at a moves next to
+        # one of the nearest cities of its end points
+        for seg in range(1, max_seg + 1):
+            for end in range(2):
+                i = pos[a] if end == 0 else (pos[a] - seg + 1) % n
+                s0 = genes[i]
+                s1 = genes[(i + seg - 1) % n]
+                p = genes[(i - 1) % n]
+                q = genes[(i + seg) % n]
+                removed = data[p, s0] + data[s1, q] - data[p, q]
+                if removed <= eps:
+                    continue
+                for which in range(2):
+                    s = s0 if which == 0 else s1
+                    for t in range(k_nb):
+                        c = int(aux[_AUX_TABLE + s * k_nb + t])
+                        if data[s, c] >= removed - eps:
+                            break
+                        ic = pos[c]
+                        if (ic - i) % n < seg:  # c is inside the run
+                            continue
+                        # try the edge after c and the edge before c
+                        for after in range(2):
+                            x_pos = ic if after == 1 else (ic - 1) % n
+                            x = genes[x_pos]
+                            y = genes[(x_pos + 1) % n]
+                            if (x_pos - i) % n < seg or ((x_pos + 1) - i) % n < seg:
+                                continue
+                            fwd = data[x, s0] + data[s1, y]
+                            rev = data[x, s1] + data[s0, y]
+                            gain = removed + data[x, y] - min(fwd, rev)
+                            if gain > eps:
+                                _move_run(genes, pos, n, i, seg, x_pos, rev < fwd, scratch)
+                                for city in (p, q, s0, s1, x, y):
+                                    tail = _push(queue, queued, tail, n, city)
+                                improved = True
+                                break
+                        if improved:
+                            break
+                    if improved:
+                        break
+                if improved:
+                    break
+            if improved:
+                break
+        if improved:
+            tail = _push(queue, queued, tail, n, a)
+    return n
+
+
+@njit(cache=True)
+def kicked_best_polished(genes, data, aux, rng, best, best_len):
+    """:func:`kicked_best`, then local search around what changed.
+
+    A nearest-neighbour tour is polished everywhere; a double-bridge kick only
+    around the eight cities at its three junctions and the wrap-around.
+    """
+    n = kicked_best(genes, data, aux, rng, best, best_len)
+    if best_len == 0 or n < 8 or not _differs(genes, best, n):
+        return local_search(genes, n, data, aux)
+    pos = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        pos[best[i]] = i
+    active = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):  # cities whose successor changed, and those successors
+        a = genes[i]
+        b = genes[(i + 1) % n]
+        if best[(pos[a] + 1) % n] != b and best[(pos[b] + 1) % n] != a:
+            active[m] = a
+            active[m + 1] = b
+            m += 2
+            if m + 2 > n:
+                break
+    return local_search_around(genes, n, data, aux, active, m)
+
+
+@njit(cache=True)
+def _differs(a, b, n):
+    for i in range(n):
+        if a[i] != b[i]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
+    """:func:`greedy_crossover`, then local search around the edges neither parent has."""
+    n = greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
+    succ_a = np.empty(n, dtype=np.int64)
+    succ_b = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        succ_a[genes_a[i]] = genes_a[(i + 1) % n]
+        succ_b[genes_b[i]] = genes_b[(i + 1) % n]
+    active = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        u = child[i]
+        v = child[(i + 1) % n]
+        parental = (succ_a[u] == v or succ_a[v] == u or succ_b[u] == v or succ_b[v] == u)
+        if not parental and m + 2 <= n:
+            active[m] = u
+            active[m + 1] = v
+            m += 2
+    if m == 0:
+        return n
+    return local_search_around(child, n, data, aux, active, m)
+
+

@@ -1,0 +1,171 @@
+"""Grid planner benchmarks: the acceptance figures of issue 4.
+
+Run from the project root:  .venv/bin/python benchmarks/grid.py [--json OUT] [--quick]
+
+* 512x512 distance fields (octile, chamfer 3/4) after warm-up;
+* the MDT on the six 14x9 maps: time per plan, and equality with the
+  brute-force line-of-sight Dijkstra (scipy) on every cell;
+* the GA (improved default and the thesis' preset) over 20 seeds per map:
+  successes, how many within 5 % of the MDT length, worst ratio, mean time;
+* VFF / VFH outcomes on the six maps and the trap;
+* every row of every MovingAI scenario file, plain (early-stopped) and
+  focused octile transforms: mismatches, max |error|, seconds;
+* the six-map comparison table (thesis Tables 4.2-4.7).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+MOVINGAI = ROOT.parent / "shared" / "data" / "movingai"
+
+
+def _timed(fn, repeats):
+    fn()  # warm-up (JIT)
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), min(times)
+
+
+def field_times(out):
+    from subtask_opt.planners.distance_transform import distance_field
+    from subtask_opt.planners.grid import GridWorld
+
+    print("\n== 512x512 distance field (after warm-up), median / best of 7 ==")
+    for name in ("random512-10-0", "8room_000"):
+        world = GridWorld.from_movingai(MOVINGAI / "maps" / f"{name}.map")
+        goal = tuple(int(v) for v in np.argwhere(~world.occupancy)[len(world.occupancy) // 2][::-1])
+        for metric in ("octile", "chamfer34"):
+            med, best = _timed(lambda w=world, g=goal, m=metric: distance_field(w, g, m), 7)
+            print(f"{name:<16} {metric:<10} median {med * 1e3:7.1f} ms  best {best * 1e3:7.1f} ms")
+            out.setdefault("field_512", []).append(
+                {"map": name, "metric": metric, "median_s": med, "best_s": best})
+
+
+def mdt_figures(out):
+    sys.path.insert(0, str(ROOT))
+    from subtask_opt.planners import distance_transform as dt
+    from subtask_opt.planners.grid_maps import THESIS_MAPS, thesis_case
+    from tests.planners.test_grid_oracles import anyangle_oracle
+
+    print("\n== MDT on the six 14x9 maps: time per plan (field + path), exactness ==")
+    for name in THESIS_MAPS:
+        c = thesis_case(name)
+        med, best = _timed(lambda c=c: dt.plan(c.world, c.start, c.goal,
+                                                params=dt.DTParams("anyangle")), 50)
+        ours = dt.distance_field(c.world, c.goal, "anyangle")
+        ref = anyangle_oracle(c.world.occupancy, c.goal)
+        fin = np.isfinite(ref)
+        exact = bool(np.array_equal(np.isfinite(ours), fin)
+                     and np.max(np.abs(ours[fin] - ref[fin])) < 1e-9)
+        mdt_len = dt.plan(c.world, c.start, c.goal, params=dt.DTParams("anyangle")).length
+        dt_len = dt.plan(c.world, c.start, c.goal).length
+        print(f"{name:<10} median {med * 1e3:6.3f} ms  best {best * 1e3:6.3f} ms  "
+              f"= brute force: {exact}  MDT {mdt_len:.3f} <= DT {dt_len:.3f}: {mdt_len <= dt_len}")
+        out.setdefault("mdt", []).append({"map": name, "median_s": med, "best_s": best,
+                                          "equals_bruteforce": exact, "mdt_length": mdt_len,
+                                          "dt_length": dt_len})
+
+
+def ga_figures(out, seeds):
+    from subtask_opt.planners import distance_transform as dt
+    from subtask_opt.planners import ga_path
+    from subtask_opt.planners.grid_maps import THESIS_MAPS, thesis_case
+
+    print(f"\n== GA over {seeds} seeds: successes / within 5% of MDT / worst ratio / mean time ==")
+    c0 = thesis_case("open")
+    ga_path.plan(c0.world, c0.start, c0.goal, seed=0)  # warm-up
+    for label, params in (("improved", ga_path.GAPathParams()),
+                          ("paper", ga_path.GAPathParams.paper())):
+        for name in THESIS_MAPS:
+            c = thesis_case(name)
+            best = dt.plan(c.world, c.start, c.goal, params=dt.DTParams("anyangle")).length
+            res = [ga_path.plan(c.world, c.start, c.goal, seed=s, params=params)
+                   for s in range(seeds)]
+            ok = sum(r.success for r in res)
+            near = sum(r.success and r.length <= 1.05 * best for r in res)
+            ratios = [r.length / best for r in res if r.success]
+            worst = max(ratios) if ratios else float("inf")
+            t = statistics.mean(r.runtime_s for r in res)
+            print(f"{label:<9} {name:<10} success {ok:2d}/{seeds}  within 5%: {near:2d}/{seeds}  "
+                  f"worst {worst:6.3f}  mean {t * 1e3:7.1f} ms")
+            out.setdefault("ga", []).append({"preset": label, "map": name, "success": ok,
+                                             "within_5pct": near, "seeds": seeds,
+                                             "worst_ratio": worst, "mean_s": t})
+
+
+def local_figures(out):
+    from subtask_opt.planners import vff, vfh
+    from subtask_opt.planners.grid_maps import MAP_NAMES, thesis_case
+
+    print("\n== VFF / VFH outcomes ==")
+    for name in MAP_NAMES:
+        c = thesis_case(name)
+        for mod in (vff, vfh):
+            r = mod.plan(c.world, c.start, c.goal)
+            what = f"reached, driven {r.info['driven_length']:.2f}" if r.success else r.message
+            print(f"{name:<10} {r.planner}: {what}")
+            out.setdefault("local", []).append({"map": name, "planner": r.planner,
+                                                "success": r.success, "message": r.message})
+
+
+def movingai_figures(out):
+    from subtask_opt.planners.grid import GridWorld
+    from subtask_opt.planners.movingai import bench, read_scenarios
+
+    print("\n== MovingAI: every row of every scenario file (octile DT vs optimum) ==")
+    for scen_path in sorted((MOVINGAI / "scenarios").glob("*.scen")):
+        name = scen_path.name.removesuffix(".map.scen")
+        world = GridWorld.from_movingai(MOVINGAI / "maps" / f"{name}.map")
+        scen = read_scenarios(scen_path)
+        for focused in (False, True):
+            rep = bench(world, scen, focused=focused)
+            print(rep.summary())
+            out.setdefault("movingai", []).append(rep.to_dict())
+
+
+def table(out):
+    from subtask_opt.planners.grid_compare import compare, format_table
+    from subtask_opt.planners.grid_maps import THESIS_MAPS, thesis_case
+
+    print("\n== six-map comparison (thesis Tables 4.2-4.7), best of 5 after warm-up ==")
+    rows = []
+    for name in THESIS_MAPS:
+        c = thesis_case(name)
+        rows.extend(compare(c.world, c.start, c.goal, repeats=5))
+    print(format_table(rows))
+    out["table"] = [r.to_dict() for r in rows]
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", help="write all figures as JSON")
+    ap.add_argument("--quick", action="store_true", help="skip the MovingAI full runs")
+    ap.add_argument("--seeds", type=int, default=20)
+    args = ap.parse_args()
+    out: dict = {}
+    field_times(out)
+    mdt_figures(out)
+    ga_figures(out, args.seeds)
+    local_figures(out)
+    table(out)
+    if not args.quick:
+        movingai_figures(out)
+    if args.json:
+        Path(args.json).write_text(json.dumps(out, indent=2, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,95 @@
+"""Reactive navigation benchmarks (seed 001): the paper's three scenarios and the
+random suite, fuzzy via-point selection (with and without the local-minimum
+escape) beside the continuous VFF and VFH baselines.
+
+    .venv/bin/python benchmarks/reactive.py [--n 200] [--seed 0] [--noise 0.0]
+                                            [--json OUT] [--out DIR]
+
+``--out DIR`` also writes, for each paper scenario and navigator, the
+trajectory figure with the sonar beams, the membership plot and (fuzzy only)
+a GIF. Timings exclude JIT compilation (one warm-up run first).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+from subtask_opt.planners.reactive_scenarios import PAPER_SCENARIOS, paper_scenario
+from subtask_opt.planners.reactive_sim import NAVIGATORS, benchmark, simulate
+from subtask_opt.planners.sonar import SonarRing
+
+
+def paper_runs(sonar: SonarRing, seed: int, out: Path | None) -> list[dict]:
+    rows = []
+    for name in PAPER_SCENARIOS:
+        sc = paper_scenario(name)
+        for nav in NAVIGATORS:
+            run = simulate(sc.world, sc.start, sc.goal, nav, sonar=sonar, seed=seed)
+            rows.append(run.summary_dict())
+            if out is not None:
+                import matplotlib.pyplot as plt
+
+                from subtask_opt.plotting.reactive import animate_run, plot_memberships, plot_run
+
+                fig = plot_run(sc.world, run)
+                fig.savefig(out / f"{name}_{nav}.png", dpi=110)
+                plt.close(fig)
+                if nav.startswith("fuzzy"):
+                    fig = plot_memberships(run)
+                    fig.savefig(out / f"{name}_{nav}_memberships.png", dpi=110)
+                    plt.close(fig)
+                if nav == "fuzzy":
+                    animate_run(sc.world, run, out / f"{name}_{nav}.gif", every=2)
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--noise", type=float, default=0.0, help="sonar noise std")
+    ap.add_argument("--json", help="write all figures as JSON")
+    ap.add_argument("--out", help="folder for figures and GIFs")
+    args = ap.parse_args()
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        out.mkdir(parents=True, exist_ok=True)
+    sonar = SonarRing(noise_std=args.noise)
+
+    t0 = time.perf_counter()
+    benchmark(1, args.seed + 10_000, sonar=sonar)          # warm-up: JIT compilation
+    print(f"warm-up (JIT) {time.perf_counter() - t0:.1f} s")
+
+    print("\npaper scenarios")
+    rows = paper_runs(sonar, args.seed, out)
+    print(f"{'scenario':<10}{'navigator':<17}{'outcome':<10}{'steps':>6}{'path':>8}"
+          f"{'min clear':>11}{'escape steps':>14}")
+    for r in rows:
+        print(f"{r['world']:<10}{r['navigator']:<17}{r['outcome']:<10}{r['steps']:>6}"
+              f"{r['path_length']:>8.2f}{r['min_clearance']:>11.3f}{r['escape_steps']:>14}")
+
+    t0 = time.perf_counter()
+    table = benchmark(args.n, args.seed, sonar=sonar, progress=True)
+    wall = time.perf_counter() - t0
+    print(f"\nrandom suite: {args.n} scenarios, seed {args.seed}, noise {args.noise}, "
+          f"{wall:.1f} s wall after warm-up")
+    print(f"{'navigator':<17}{'success':>9}{'coll.':>7}{'timeout':>9}{'rate':>8}"
+          f"{'path ratio':>12}{'min clear':>11}{'ms/run':>9}")
+    for name, row in table.items():
+        print(f"{name:<17}{row['success']:>9}{row['collisions']:>7}{row['timeouts']:>9}"
+              f"{row['success_rate']:>8.1%}{row['mean_path_ratio']:>12.3f}"
+              f"{row['mean_min_clearance']:>11.3f}{row['mean_runtime_s'] * 1e3:>9.1f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(
+            {"paper": rows, "suite": table, "n": args.n, "seed": args.seed,
+             "noise": args.noise, "wall_time_s": wall}, indent=2, default=float) + "\n")
+
+
+if __name__ == "__main__":
+    main()

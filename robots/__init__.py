@@ -1,0 +1,1 @@
+"""Robot descriptions (URDF + limit parameter files) shipped with subtask_opt."""

@@ -1,0 +1,158 @@
+"""Permutation operators: invariants (hypothesis) and local-optimality checks."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from subtask_opt.ga.permutation import (
+    exact_local_search,
+    greedy_crossover,
+    greedy_crossover_polished,
+    kicked_best,
+    kicked_best_polished,
+    local_search,
+    make_aux,
+    tour_cost,
+)
+
+
+def _points_matrix(seed: int, n: int) -> np.ndarray:
+    pts = np.random.default_rng(seed).random((n, 2))
+    return np.hypot(*(pts[:, None] - pts[None]).transpose(2, 0, 1))
+
+
+def _is_permutation(tour: np.ndarray, n: int) -> bool:
+    return np.array_equal(np.sort(tour[:n]), np.arange(n))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(3, 25), nearest=st.booleans(),
+       asymmetric=st.booleans())
+def test_greedy_crossover_always_yields_a_permutation(seed, n, nearest, asymmetric):
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n)
+    if asymmetric:
+        m = m + rng.random((n, n))
+    aux = make_aux(m, nearest_fallback=nearest)
+    a = rng.permutation(n).astype(np.int64)
+    b = rng.permutation(n).astype(np.int64)
+    child = np.full(n, -1, dtype=np.int64)
+    length = greedy_crossover(a, n, b, n, m, aux, rng, child)
+    assert length == n
+    assert _is_permutation(child, n)
+    child2 = np.full(n, -1, dtype=np.int64)
+    greedy_crossover_polished(a, n, b, n, m, aux, rng, child2)
+    assert _is_permutation(child2, n)
+
+
+def test_greedy_crossover_of_identical_parents_reproduces_the_tour():
+    m = _points_matrix(3, 12)
+    aux = make_aux(m, nearest_fallback=False)
+    rng = np.random.default_rng(0)
+    parent = rng.permutation(12).astype(np.int64)
+    child = np.empty(12, dtype=np.int64)
+    greedy_crossover(parent, 12, parent.copy(), 12, m, aux, rng, child)
+    np.testing.assert_array_equal(child, parent)
+
+
+def test_greedy_crossover_follows_the_shorter_parental_edge():
+    # From city 0 parent A goes to 1 (cost 1), parent B to 2 (cost 5): take 1.
+    m = np.array([[0, 1, 5, 9], [1, 0, 9, 9], [5, 9, 0, 9], [9, 9, 9, 0]], dtype=float)
+    aux = make_aux(m, nearest_fallback=True)
+    a = np.array([0, 1, 2, 3], dtype=np.int64)
+    b = np.array([0, 2, 1, 3], dtype=np.int64)
+    child = np.empty(4, dtype=np.int64)
+    greedy_crossover(a, 4, b, 4, m, aux, np.random.default_rng(1), child)
+    assert child[0] == 0 and child[1] == 1
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 30))
+def test_kicks_yield_permutations(seed, n):
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n)
+    aux = make_aux(m, nearest_fallback=True)
+    best = rng.permutation(n).astype(np.int64)
+    for fn in (kicked_best, kicked_best_polished):
+        genes = np.full(n, -1, dtype=np.int64)
+        assert fn(genes, m, aux, rng, best, n) == n
+        assert _is_permutation(genes, n)
+
+
+def _two_opt_improvable(tour: np.ndarray, m: np.ndarray) -> bool:
+    n = len(tour)
+    base = tour_cost(tour, n, m, None)
+    for i in range(n - 1):
+        for j in range(i + 2, n + 1):
+            cand = tour.copy()
+            cand[i:j] = cand[i:j][::-1]
+            if tour_cost(cand, n, m, None) < base - 1e-9:
+                return True
+    return False
+
+
+def _or_opt_improvable(tour: np.ndarray, m: np.ndarray, max_seg: int) -> bool:
+    n = len(tour)
+    base = tour_cost(tour, n, m, None)
+    for seg in range(1, max_seg + 1):
+        for i in range(n - seg + 1):
+            run = tour[i:i + seg]
+            rest = np.concatenate([tour[:i], tour[i + seg:]])
+            for k in range(len(rest) + 1):
+                for piece in (run, run[::-1]):
+                    cand = np.concatenate([rest[:k], piece, rest[k:]])
+                    if tour_cost(cand, n, m, None) < base - 1e-9:
+                        return True
+    return False
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(5, 14), asymmetric=st.booleans())
+def test_exact_local_search_reaches_a_two_opt_and_or_opt_optimum(seed, n, asymmetric):
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n)
+    if asymmetric:
+        m = m + rng.random((n, n))
+    aux = make_aux(m, nearest_fallback=True, max_segment=3)
+    tour = rng.permutation(n).astype(np.int64)
+    before = tour_cost(tour, n, m, aux)
+    exact_local_search(tour, n, m, aux)
+    assert _is_permutation(tour, n)
+    assert tour_cost(tour, n, m, aux) <= before + 1e-12
+    assert not _two_opt_improvable(tour, m)
+    assert not _or_opt_improvable(tour, m, min(3, n - 3))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(3, 40))
+def test_fast_local_search_never_worsens_and_keeps_a_permutation(seed, n):
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n)
+    aux = make_aux(m, nearest_fallback=True)
+    tour = rng.permutation(n).astype(np.int64)
+    before = tour_cost(tour, n, m, aux)
+    local_search(tour, n, m, aux)
+    assert _is_permutation(tour, n)
+    assert tour_cost(tour, n, m, aux) <= before + 1e-12
+
+
+def test_fast_local_search_with_full_neighbour_lists_is_a_two_opt_optimum():
+    # With every city a candidate, neighbour-list pruning only skips moves
+    # whose first new edge is not shorter than the one it removes, which can
+    # never start an improving 2-opt move: the result is 2-opt optimal.
+    for seed in range(20):
+        n = 12
+        m = _points_matrix(seed, n)
+        aux = make_aux(m, nearest_fallback=True, neighbours=n - 1)
+        tour = np.random.default_rng(seed).permutation(n).astype(np.int64)
+        local_search(tour, n, m, aux)
+        assert not _two_opt_improvable(tour, m)
+
+
+def test_tour_cost_matches_numpy():
+    m = _points_matrix(7, 9) + np.random.default_rng(7).random((9, 9))
+    tour = np.random.default_rng(8).permutation(9).astype(np.int64)
+    expected = m[tour, np.roll(tour, -1)].sum()
+    assert abs(tour_cost(tour, 9, m, None) - expected) < 1e-12

@@ -1,0 +1,159 @@
+"""Independent oracles for the grid planner tests (and tests of the oracles).
+
+Line of sight by Liang-Barsky clipping against each blocked cell's closed
+square, in floats: the touching cases (t_enter == t_exit) compare equal
+rationals with small denominators, and IEEE division is correctly rounded,
+so the comparisons are exact. Shortest paths by scipy's Dijkstra.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+
+def segment_touches_box(p0, p1, lo, hi) -> bool:
+    """Whether segment p0-p1 meets the closed box [lo, hi] (Liang-Barsky)."""
+    t0, t1 = 0.0, 1.0
+    for axis in range(2):
+        d = p1[axis] - p0[axis]
+        if d == 0:
+            if p0[axis] < lo[axis] or p0[axis] > hi[axis]:
+                return False
+            continue
+        ta = (lo[axis] - p0[axis]) / d
+        tb = (hi[axis] - p0[axis]) / d
+        if ta > tb:
+            ta, tb = tb, ta
+        t0, t1 = max(t0, ta), min(t1, tb)
+        if t0 > t1:
+            return False
+    return True
+
+
+def los_free(occ: np.ndarray, a, b) -> bool:
+    """Segment between cell centres a=(x, y), b touches no blocked closed square
+    (Liang-Barsky against all blocked cells at once)."""
+    ys, xs = np.nonzero(occ)
+    if xs.size == 0:
+        return True
+    p0 = np.asarray(a, dtype=float)
+    d = np.asarray(b, dtype=float) - p0
+    t0 = np.zeros(xs.size)
+    t1 = np.ones(xs.size)
+    inside = np.ones(xs.size, dtype=bool)
+    for axis, c in ((0, xs), (1, ys)):
+        lo, hi = c - 0.5, c + 0.5
+        if d[axis] == 0:
+            inside &= (p0[axis] >= lo) & (p0[axis] <= hi)
+            continue
+        ta = (lo - p0[axis]) / d[axis]
+        tb = (hi - p0[axis]) / d[axis]
+        t0 = np.maximum(t0, np.minimum(ta, tb))
+        t1 = np.minimum(t1, np.maximum(ta, tb))
+    return not np.any(inside & (t0 <= t1))
+
+
+def path_free(occ: np.ndarray, path) -> bool:
+    pts = [tuple(map(float, p)) for p in path]
+    return all(los_free(occ, pts[i], pts[i + 1]) for i in range(len(pts) - 1))
+
+
+def octile_oracle(occ: np.ndarray, goal) -> np.ndarray:
+    """8-connected distances (1, sqrt 2, no corner cutting) by scipy Dijkstra."""
+    h, w = occ.shape
+    rows, cols, vals = [], [], []
+    for y in range(h):
+        for x in range(w):
+            if occ[y, x]:
+                continue
+            for dx in (-1, 0, 1):
+                for dy in (-1, 0, 1):
+                    nx, ny = x + dx, y + dy
+                    if (dx, dy) == (0, 0) or not (0 <= nx < w and 0 <= ny < h) or occ[ny, nx]:
+                        continue
+                    if dx and dy and (occ[y, nx] or occ[ny, x]):
+                        continue
+                    rows.append(y * w + x)
+                    cols.append(ny * w + nx)
+                    vals.append(math.hypot(dx, dy))
+    g = csr_matrix((vals, (rows, cols)), shape=(h * w, h * w))
+    d = dijkstra(g, indices=goal[1] * w + goal[0])
+    d = d.reshape(h, w)
+    d[occ] = np.inf
+    return d
+
+
+def chamfer_oracle(occ: np.ndarray, goal) -> np.ndarray:
+    """Jarvis' transform as the thesis describes it: raster sweeps with 3/4
+    weights, repeated until nothing changes (result in cells, value / 3)."""
+    h, w = occ.shape
+    big = 10**9
+    d = np.full((h, w), big, dtype=np.int64)
+    d[goal[1], goal[0]] = 0
+    changed = True
+    while changed:
+        changed = False
+        for sweep in (1, -1):
+            ys = range(h) if sweep == 1 else range(h - 1, -1, -1)
+            for y in ys:
+                xs = range(w) if sweep == 1 else range(w - 1, -1, -1)
+                for x in xs:
+                    if occ[y, x]:
+                        continue
+                    for dx in (-1, 0, 1):
+                        for dy in (-1, 0, 1):
+                            nx, ny = x + dx, y + dy
+                            if (dx, dy) == (0, 0) or not (0 <= nx < w and 0 <= ny < h):
+                                continue
+                            if occ[ny, nx] or (dx and dy and (occ[y, nx] or occ[ny, x])):
+                                continue
+                            v = d[ny, nx] + (4 if dx and dy else 3)
+                            if v < d[y, x]:
+                                d[y, x] = v
+                                changed = True
+    out = np.where(d >= big, np.inf, d / 3.0)
+    out[occ] = np.inf
+    return out
+
+
+def anyangle_oracle(occ: np.ndarray, goal) -> np.ndarray:
+    """Dijkstra on the graph of every line-of-sight pair of free cell centres."""
+    h, w = occ.shape
+    free = [(x, y) for y in range(h) for x in range(w) if not occ[y, x]]
+    idx = {c: i for i, c in enumerate(free)}
+    rows, cols, vals = [], [], []
+    for i, a in enumerate(free):
+        for j in range(i + 1, len(free)):
+            b = free[j]
+            if los_free(occ, a, b):
+                length = math.hypot(a[0] - b[0], a[1] - b[1])
+                rows += [i, j]
+                cols += [j, i]
+                vals += [length, length]
+    g = csr_matrix((vals, (rows, cols)), shape=(len(free), len(free)))
+    d = dijkstra(g, indices=idx[tuple(goal)])
+    out = np.full((h, w), np.inf)
+    for (x, y), v in zip(free, d, strict=True):
+        out[y, x] = v
+    return out
+
+
+# -- tests of the oracles themselves ------------------------------------------------
+def test_box_touch_cases():
+    box = ((0.5, -0.5), (1.5, 0.5))
+    assert segment_touches_box((0, 0), (1, 1), *box)  # through the corner (0.5, 0.5)
+    assert not segment_touches_box((0, 1), (1, 2), *box)
+    assert segment_touches_box((0, 0), (2, 0), *box)
+
+
+def test_oracles_agree_on_open_grid():
+    occ = np.zeros((4, 5), dtype=bool)
+    d8 = octile_oracle(occ, (0, 0))
+    assert d8[3, 4] == pytest.approx(math.sqrt(2) * 3 + 1)
+    assert chamfer_oracle(occ, (0, 0))[3, 4] == (4 * 3 + 3) / 3
+    assert anyangle_oracle(occ, (0, 0))[3, 4] == 5.0
