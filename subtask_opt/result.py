@@ -19,12 +19,14 @@ class History:
     """Cost per generation of an iterative optimiser.
 
     Attributes:
+        initial_best: best cost of the initial population (generation 0).
         best_cost: best cost found so far, after each generation (length G).
         mean_cost: mean cost of the population in each generation (length G).
         restarts: generation numbers (1-based, as in ``best_cost``) at which
             the population was re-seeded.
     """
 
+    initial_best: float
     best_cost: np.ndarray
     mean_cost: np.ndarray
     restarts: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
@@ -34,15 +36,18 @@ class History:
         return int(self.best_cost.shape[0])
 
     def generation_of_best(self, rtol: float = 1e-9) -> int:
-        """First generation (1-based) whose best cost equals the final best."""
+        """Generation at which the final best was first reached (0: the initial population)."""
         if self.generations == 0:
             return 0
         final = self.best_cost[-1]
+        if self.initial_best <= final + rtol * abs(final):
+            return 0
         hit = np.flatnonzero(self.best_cost <= final + rtol * abs(final))
         return int(hit[0]) + 1
 
     def to_dict(self) -> dict[str, Any]:
         return {
+            "initial_best": self.initial_best,
             "best_cost": self.best_cost.tolist(),
             "mean_cost": self.mean_cost.tolist(),
             "restarts": self.restarts.tolist(),

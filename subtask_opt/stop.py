@@ -11,6 +11,8 @@ whatever the chunking, and a seeded run is reproducible.
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -119,8 +121,8 @@ def as_criteria(stop: StoppingCriterion | list[StoppingCriterion] | tuple | None
     criteria = list(stop) if isinstance(stop, (list, tuple)) else [stop]
     if not criteria:
         raise ParameterError("stop must hold at least one stopping criterion, got []")
-    for c in criteria:
-        if not isinstance(c, StoppingCriterion):
+    for c in criteria:  # duck-typed: isinstance on a runtime Protocol is slow
+        if not (callable(c) and callable(getattr(c, "generations_left", None))):
             raise ParameterError(f"stop: {c!r} is not a stopping criterion")
     if not any(c.generations_left(Progress(0, math.inf, 0, 0.0)) is not None
                or isinstance(c, MaxRuntime) for c in criteria):
@@ -134,3 +136,35 @@ def target_threshold(criteria: list[StoppingCriterion]) -> float:
     """The lowest TargetCost threshold among ``criteria`` (``-inf`` when none)."""
     thresholds = [c.threshold for c in criteria if isinstance(c, TargetCost)]
     return min(thresholds) if thresholds else -math.inf
+
+
+def run_in_chunks(run_chunk: Callable[[int], int], progress: Callable[[], Progress],
+                  criteria: list[StoppingCriterion],
+                  on_chunk: Callable[[Progress], None] | None = None) -> None:
+    """Drive an iterative kernel until one of ``criteria`` holds.
+
+    ``run_chunk(n)`` runs at most ``n`` iterations (it may stop early, e.g. at
+    a stall limit or target it enforces itself) and returns how many ran;
+    ``progress()`` describes the state between chunks. Chunks never pass a
+    generation-based limit, so a seeded run is the same however it is chunked;
+    they grow while fast so that time-based criteria are still checked often.
+    ``on_chunk`` (a progress bar, say) is called after each chunk. The
+    criteria are first asked after the first chunk, which also initialises.
+    """
+    chunk_cap = 64
+    first = True
+    while True:
+        state = progress()
+        if not first and any(c(state) for c in criteria):
+            return
+        first = False
+        bounded = [b for b in (c.generations_left(state) for c in criteria) if b is not None]
+        n = min(min(bounded) if bounded else chunk_cap, chunk_cap)
+        t0 = time.perf_counter()
+        ran = run_chunk(n)
+        if time.perf_counter() - t0 < 0.05:
+            chunk_cap = min(chunk_cap * 2, 1 << 20)
+        if on_chunk is not None:
+            on_chunk(progress())
+        if ran < n or n == 0:  # the kernel met its own limit, or nothing was left to run
+            return

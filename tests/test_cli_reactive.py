@@ -10,14 +10,6 @@ from subtask_opt.cli import main
 from subtask_opt.planners.reactive_scenarios import paper_scenario
 
 
-def _exit_code(argv: list[str]) -> int:
-    """main's return code, or argparse's exit code for a usage error."""
-    try:
-        return main(argv)
-    except SystemExit as exc:
-        return int(exc.code)
-
-
 def test_plan_reactive_writes_json_plot_and_gif(tmp_path, capsys):
     out = tmp_path / "run.json"
     png = tmp_path / "run.png"
@@ -71,7 +63,7 @@ def test_bench_reactive_json(tmp_path, capsys):
     (["--world", "u-trap", "--navigator", "bug"], "invalid choice"),
 ])
 def test_bad_plan_inputs_exit_2_with_one_line(argv, words, capsys):
-    assert _exit_code(["plan", "reactive", *argv]) == 2
+    assert main(["plan", "reactive", *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and words in err
 
@@ -83,5 +75,5 @@ def test_missing_world_file_exits_2(tmp_path, capsys):
 
 
 def test_bad_bench_inputs_exit_2(capsys):
-    assert _exit_code(["bench", "reactive", "--n", "0"]) == 2
+    assert main(["bench", "reactive", "--n", "0"]) == 2
     assert capsys.readouterr().err.count("\n") == 1

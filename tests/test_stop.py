@@ -14,6 +14,7 @@ from subtask_opt.stop import (
     Progress,
     TargetCost,
     as_criteria,
+    run_in_chunks,
     target_threshold,
 )
 
@@ -59,3 +60,34 @@ def test_as_criteria_normalises_and_validates():
 def test_bad_criteria_raise(make):
     with pytest.raises(ParameterError):
         make()
+
+
+def _fake_kernel(stall_at: int | None = None):
+    """A kernel that counts iterations and may stop itself early, like the GA's."""
+    state = {"gen": 0, "chunks": []}
+
+    def run_chunk(n: int) -> int:
+        ran = n if stall_at is None else max(0, min(n, stall_at - state["gen"]))
+        state["gen"] += ran
+        state["chunks"].append(n)
+        return ran
+
+    def progress() -> Progress:
+        return _p(gen=state["gen"])
+
+    return state, run_chunk, progress
+
+
+def test_run_in_chunks_stops_exactly_at_max_generations():
+    state, run_chunk, progress = _fake_kernel()
+    seen = []
+    run_in_chunks(run_chunk, progress, [MaxGenerations(300)], on_chunk=seen.append)
+    assert state["gen"] == 300
+    assert state["chunks"] == [64, 128, 108]  # growing chunks, never past the limit
+    assert [p.generation for p in seen] == [64, 192, 300]
+
+
+def test_run_in_chunks_ends_when_the_kernel_stops_itself():
+    state, run_chunk, progress = _fake_kernel(stall_at=70)
+    run_in_chunks(run_chunk, progress, [MaxRuntime(60.0)])
+    assert state["gen"] == 70

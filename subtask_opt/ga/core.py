@@ -43,6 +43,7 @@ from ..stop import (
     NoImprovement,
     Progress,
     StoppingCriterion,
+    run_in_chunks,
     target_threshold,
 )
 from . import registry as ops
@@ -222,6 +223,7 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, cfg,
         counters[_BEST_LEN] = lengths[i_best]
         best[: lengths[i_best]] = pop[i_best, : lengths[i_best]]
         best_cost[0] = costs[i_best]
+        best_cost[1] = costs[i_best]  # kept: the best of the initial population
     ran = 0
     for step in range(n_gens):
         if best_cost[0] <= target or counters[_GEN] - counters[_LAST_IMPROVE] >= stall_limit:
@@ -280,12 +282,10 @@ def run_ga(
     criteria: list[StoppingCriterion],
     on_chunk: Callable[[Progress], None] | None = None,
 ) -> GAOutcome:
-    """Drive the numba loop in chunks until a stopping criterion holds.
+    """Run the GA until a stopping criterion holds (see :func:`run_in_chunks`).
 
-    Generation-based criteria are enforced inside the kernel, so the result is
-    the same for a given seed however the run is chunked; time-based criteria
-    are checked between chunks. ``on_chunk`` (e.g. a progress bar) is called
-    after every chunk.
+    The stall limit and the target cost are enforced inside the kernel, so a
+    seeded run stops at the same generation however it is chunked.
     """
     require_int("run_ga", "max_genes", max_genes, 1)
     rng = np.random.default_rng(seed)
@@ -296,7 +296,7 @@ def run_ga(
     lengths = np.zeros(config.population, dtype=np.int64)
     costs = np.zeros(config.population)
     best = np.zeros(max_genes, dtype=np.int64)
-    best_cost = np.zeros(1)
+    best_cost = np.zeros(2)  # [best so far, best of the initial population]
     counters = np.zeros(4, dtype=np.int64)
     stall_limit = min((c.generations for c in criteria if isinstance(c, NoImprovement)),
                       default=np.iinfo(np.int64).max)
@@ -306,32 +306,22 @@ def run_ga(
     hist_best: list[np.ndarray] = []
     hist_mean: list[np.ndarray] = []
     hist_restart: list[np.ndarray] = []
-    chunk_cap = 64  # grows while chunks are fast, so time-based checks stay frequent
-    while True:
-        progress = _progress(counters, best_cost, start)
-        if counters[_BEST_LEN] > 0 and any(c(progress) for c in criteria):
-            break
-        bounds = [c.generations_left(progress) for c in criteria]
-        bounded = [b for b in bounds if b is not None]
-        n_gens = min(bounded) if bounded else chunk_cap
-        n_gens = min(n_gens, chunk_cap)
+
+    def run_chunk(n_gens: int) -> int:
         hb, hm, hr = np.empty(n_gens), np.empty(n_gens), np.empty(n_gens, dtype=np.int64)
-        t0 = time.perf_counter()
         ran = evolve(operators.kind, pop, lengths, costs, best, best_cost, counters, data,
                      aux, cfg, rng, n_gens, stall_limit, target, hb, hm, hr)
         hist_best.append(hb[:ran])
         hist_mean.append(hm[:ran])
         hist_restart.append(hr[:ran])
-        if time.perf_counter() - t0 < 0.05:
-            chunk_cap = min(chunk_cap * 2, 1 << 20)
-        if on_chunk is not None:
-            on_chunk(_progress(counters, best_cost, start))
-        if ran < n_gens or n_gens == 0:  # target or stall limit met, or nothing left to run
-            break
+        return ran
+
+    run_in_chunks(run_chunk, lambda: _progress(counters, best_cost, start), criteria, on_chunk)
     runtime = time.perf_counter() - start
 
     restart_flags = np.concatenate(hist_restart) if hist_restart else np.zeros(0, np.int64)
     history = History(
+        initial_best=float(best_cost[1]),
         best_cost=np.concatenate(hist_best) if hist_best else np.zeros(0),
         mean_cost=np.concatenate(hist_mean) if hist_mean else np.zeros(0),
         restarts=np.flatnonzero(restart_flags) + 1,

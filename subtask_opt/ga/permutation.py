@@ -25,17 +25,21 @@ AUX_FALLBACK, AUX_GRASP, AUX_MAX_SEGMENT, AUX_NEIGHBOURS = range(4)
 _AUX_TABLE = 4
 
 
-def make_aux(matrix: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.5,
-             max_segment: int = 3, neighbours: int = 8) -> np.ndarray:
-    """Pack the operator parameters and the nearest-neighbour table into ``aux``."""
-    n = matrix.shape[0]
-    k = max(1, min(neighbours, n - 1))
+def neighbour_table(matrix: np.ndarray) -> np.ndarray:
+    """Each city's other cities, nearest first (by the cheaper of the two directions)."""
     closeness = np.minimum(matrix, matrix.T).astype(float)
     np.fill_diagonal(closeness, np.inf)
-    table = np.argsort(closeness, axis=1, kind="stable")[:, :k]
+    return np.argsort(closeness, axis=1, kind="stable")[:, :-1]
+
+
+def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.25,
+             max_segment: int = 3, neighbours: int = 8) -> np.ndarray:
+    """Pack the operator parameters and the first ``neighbours`` columns of
+    ``table`` (:func:`neighbour_table` of the matrix) into ``aux``."""
+    k = max(1, min(neighbours, table.shape[1]))
     head = [FALLBACK_NEAREST if nearest_fallback else FALLBACK_RANDOM, grasp_share,
             float(max_segment), float(k)]
-    return np.concatenate([np.array(head), table.astype(float).ravel()])
+    return np.concatenate([np.array(head), table[:, :k].astype(float).ravel()])
 
 
 @njit(cache=True)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from numba import njit
 
 from ..errors import ParameterError
+from . import configured as gtsp
 from . import permutation as tsp
 from . import waypoints as wp
 
@@ -23,11 +24,15 @@ PAPER_TSP = 0
 MEMETIC_TSP = 1
 EXACT_MEMETIC_TSP = 2
 WAYPOINT_PATH = 3
+PAPER_CONFIGURED_TSP = 4
+MEMETIC_CONFIGURED_TSP = 5
 _NAMES = {
     PAPER_TSP: "paper micro-GA (TSP)",
     MEMETIC_TSP: "micro-GA + fast local search (symmetric TSP)",
     EXACT_MEMETIC_TSP: "micro-GA + exact local search (any TSP)",
     WAYPOINT_PATH: "waypoint path on a grid (GA path planner)",
+    PAPER_CONFIGURED_TSP: "paper micro-GA, exact decoding of elbow configurations",
+    MEMETIC_CONFIGURED_TSP: "micro-GA + local search, exact decoding of elbow configurations",
 }
 
 
@@ -61,6 +66,14 @@ EXACT_MEMETIC_OPERATORS = OperatorSet(EXACT_MEMETIC_TSP)
 WAYPOINT_OPERATORS = OperatorSet(WAYPOINT_PATH)
 """Variable-length waypoint paths of the GA path planner (:mod:`subtask_opt.ga.waypoints`)."""
 
+PAPER_CONFIGURED_OPERATORS = OperatorSet(PAPER_CONFIGURED_TSP)
+"""The paper's micro-GA on orders whose elbow configurations are decoded exactly
+(:mod:`subtask_opt.ga.configured`)."""
+
+MEMETIC_CONFIGURED_OPERATORS = OperatorSet(MEMETIC_CONFIGURED_TSP)
+"""Our default on orders with exactly decoded elbow configurations: greedy crossover
+and restarts on the cheapest leg times, then alternating decoding and local search."""
+
 
 @njit(cache=True)
 def randomize(kind, genes, data, aux, rng, best, best_len):
@@ -68,7 +81,7 @@ def randomize(kind, genes, data, aux, rng, best, best_len):
         return wp.random_path(genes, data, aux, rng, best, best_len)
     if kind == MEMETIC_TSP:
         return tsp.kicked_best_polished(genes, data, aux, rng, best, best_len)
-    if kind == EXACT_MEMETIC_TSP:
+    if kind == EXACT_MEMETIC_TSP or kind == MEMETIC_CONFIGURED_TSP:
         return tsp.kicked_best(genes, data, aux, rng, best, best_len)
     return tsp.random_tour(genes, data, aux, rng, best, best_len)
 
@@ -77,6 +90,8 @@ def randomize(kind, genes, data, aux, rng, best, best_len):
 def evaluate(kind, genes, length, data, aux):
     if kind == WAYPOINT_PATH:
         return wp.path_cost(genes, length, data, aux)
+    if kind == PAPER_CONFIGURED_TSP or kind == MEMETIC_CONFIGURED_TSP:
+        return gtsp.tour_cost(genes, length, data, aux)
     return tsp.tour_cost(genes, length, data, aux)
 
 
@@ -103,4 +118,6 @@ def improve(kind, genes, length, data, aux):
         return wp.shortcut(genes, length, data, aux)
     if kind == EXACT_MEMETIC_TSP:
         return tsp.exact_local_search(genes, length, data, aux)
+    if kind == MEMETIC_CONFIGURED_TSP:
+        return gtsp.local_search(genes, length, data, aux)
     return length

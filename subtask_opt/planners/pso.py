@@ -32,6 +32,7 @@ from ..stop import (
     Progress,
     StoppingCriterion,
     as_criteria,
+    run_in_chunks,
     target_threshold,
 )
 from . import _geometry_kernels as gk
@@ -126,26 +127,19 @@ def optimize_crossings(links: np.ndarray, start: np.ndarray, goal: np.ndarray,
     t0 = time.perf_counter()
     hist_best: list[np.ndarray] = []
     hist_mean: list[np.ndarray] = []
-    chunk_cap = 64
-    while True:
-        progress = _progress(counters, gbest_cost, t0)
-        if any(c(progress) for c in criteria):
-            break
-        bounded = [b for b in (c.generations_left(progress) for c in criteria) if b is not None]
-        n = min(min(bounded) if bounded else chunk_cap, chunk_cap)
+    initial_best = float(gbest_cost[0])
+
+    def run_chunk(n: int) -> int:
         hb, hm = np.empty(n), np.empty(n)
-        tc = time.perf_counter()
         ran = gk.pso_run(x, v, pbest, pbest_cost, gbest, gbest_cost, counters, links, start,
                          goal, cfg, rng, n, stall_limit, target, hb, hm)
         hist_best.append(hb[:ran])
         hist_mean.append(hm[:ran])
-        if time.perf_counter() - tc < 0.05:
-            chunk_cap = min(chunk_cap * 2, 1 << 20)
-        if on_chunk is not None:
-            on_chunk(_progress(counters, gbest_cost, t0))
-        if ran < n or n == 0:
-            break
-    history = History(best_cost=np.concatenate(hist_best) if hist_best else np.zeros(0),
+        return ran
+
+    run_in_chunks(run_chunk, lambda: _progress(counters, gbest_cost, t0), criteria, on_chunk)
+    history = History(initial_best=initial_best,
+                      best_cost=np.concatenate(hist_best) if hist_best else np.zeros(0),
                       mean_cost=np.concatenate(hist_mean) if hist_mean else np.zeros(0))
     return SwarmOutcome(t=gbest, cost=float(gbest_cost[0]), iterations=int(counters[0]),
                         history=history, runtime_s=time.perf_counter() - t0)
@@ -206,7 +200,8 @@ def plan(world: PolygonWorld, start: Any, goal: Any, *, params: PSOParams | None
         message = "ok (PSO started from the Dijkstra route)"
     if len(ids) == 0:  # start and goal share a cell: the straight line is optimal
         outcome = SwarmOutcome(t=np.zeros(0), cost=_length(improved), iterations=0,
-                               history=History(np.zeros(0), np.zeros(0)), runtime_s=0.0)
+                               history=History(_length(improved), np.zeros(0), np.zeros(0)),
+                               runtime_s=0.0)
     else:
         outcome = optimize_crossings(graph.links[ids], s, g, t_init, params=params, seed=seed,
                                      stop=criteria, on_chunk=on_chunk)

@@ -7,7 +7,7 @@ import pytest
 
 from subtask_opt.errors import ParameterError
 from subtask_opt.ga.core import GAConfig, run_ga
-from subtask_opt.ga.permutation import make_aux
+from subtask_opt.ga.permutation import make_aux, neighbour_table
 from subtask_opt.ga.registry import MEMETIC_OPERATORS, PAPER_OPERATORS
 from subtask_opt.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
 
@@ -19,7 +19,7 @@ def _matrix(seed: int = 0, n: int = 12) -> np.ndarray:
 
 def _run(ops=PAPER_OPERATORS, seed=0, criteria=None, config=None, m=None):
     m = _matrix() if m is None else m
-    aux = make_aux(m, nearest_fallback=ops is not PAPER_OPERATORS)
+    aux = make_aux(neighbour_table(m), nearest_fallback=ops is not PAPER_OPERATORS)
     return run_ga(ops, config or GAConfig(), m, aux, max_genes=m.shape[0], seed=seed,
                   criteria=criteria or [MaxGenerations(150)])
 

@@ -14,6 +14,7 @@ from subtask_opt.ga.permutation import (
     kicked_best_polished,
     local_search,
     make_aux,
+    neighbour_table,
     tour_cost,
 )
 
@@ -35,7 +36,7 @@ def test_greedy_crossover_always_yields_a_permutation(seed, n, nearest, asymmetr
     m = _points_matrix(seed, n)
     if asymmetric:
         m = m + rng.random((n, n))
-    aux = make_aux(m, nearest_fallback=nearest)
+    aux = make_aux(neighbour_table(m), nearest_fallback=nearest)
     a = rng.permutation(n).astype(np.int64)
     b = rng.permutation(n).astype(np.int64)
     child = np.full(n, -1, dtype=np.int64)
@@ -49,7 +50,7 @@ def test_greedy_crossover_always_yields_a_permutation(seed, n, nearest, asymmetr
 
 def test_greedy_crossover_of_identical_parents_reproduces_the_tour():
     m = _points_matrix(3, 12)
-    aux = make_aux(m, nearest_fallback=False)
+    aux = make_aux(neighbour_table(m), nearest_fallback=False)
     rng = np.random.default_rng(0)
     parent = rng.permutation(12).astype(np.int64)
     child = np.empty(12, dtype=np.int64)
@@ -60,7 +61,7 @@ def test_greedy_crossover_of_identical_parents_reproduces_the_tour():
 def test_greedy_crossover_follows_the_shorter_parental_edge():
     # From city 0 parent A goes to 1 (cost 1), parent B to 2 (cost 5): take 1.
     m = np.array([[0, 1, 5, 9], [1, 0, 9, 9], [5, 9, 0, 9], [9, 9, 9, 0]], dtype=float)
-    aux = make_aux(m, nearest_fallback=True)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True)
     a = np.array([0, 1, 2, 3], dtype=np.int64)
     b = np.array([0, 2, 1, 3], dtype=np.int64)
     child = np.empty(4, dtype=np.int64)
@@ -73,7 +74,7 @@ def test_greedy_crossover_follows_the_shorter_parental_edge():
 def test_kicks_yield_permutations(seed, n):
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n)
-    aux = make_aux(m, nearest_fallback=True)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True)
     best = rng.permutation(n).astype(np.int64)
     for fn in (kicked_best, kicked_best_polished):
         genes = np.full(n, -1, dtype=np.int64)
@@ -115,7 +116,7 @@ def test_exact_local_search_reaches_a_two_opt_and_or_opt_optimum(seed, n, asymme
     m = _points_matrix(seed, n)
     if asymmetric:
         m = m + rng.random((n, n))
-    aux = make_aux(m, nearest_fallback=True, max_segment=3)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, max_segment=3)
     tour = rng.permutation(n).astype(np.int64)
     before = tour_cost(tour, n, m, aux)
     exact_local_search(tour, n, m, aux)
@@ -130,7 +131,7 @@ def test_exact_local_search_reaches_a_two_opt_and_or_opt_optimum(seed, n, asymme
 def test_fast_local_search_never_worsens_and_keeps_a_permutation(seed, n):
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n)
-    aux = make_aux(m, nearest_fallback=True)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True)
     tour = rng.permutation(n).astype(np.int64)
     before = tour_cost(tour, n, m, aux)
     local_search(tour, n, m, aux)
@@ -145,7 +146,7 @@ def test_fast_local_search_with_full_neighbour_lists_is_a_two_opt_optimum():
     for seed in range(20):
         n = 12
         m = _points_matrix(seed, n)
-        aux = make_aux(m, nearest_fallback=True, neighbours=n - 1)
+        aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=n - 1)
         tour = np.random.default_rng(seed).permutation(n).astype(np.int64)
         local_search(tour, n, m, aux)
         assert not _two_opt_improvable(tour, m)

@@ -1,0 +1,200 @@
+"""How often and how fast the micro-GA finds the certified optimum, beside peers.
+
+Instances: square20 and random30 from 10 generator seeds (robot and time
+model selectable). Each instance's optimum is certified by an exact MILP with
+subtour cuts (HiGHS, :func:`subtask_opt.exact.milp_optimum`), not taken from
+our own runs. Both presets solve every instance from ``--seeds`` seeds; the
+peers OR-Tools (guided local search) and elkai (LKH-3) solve the same
+matrices in the same run when installed (``pip install -e '.[bench]'``).
+
+Times are wall times of the search after JIT warm-up (the compile time of the
+first call is reported apart); the machine is shared and noisy, so compare
+medians and ratios within one run.
+
+    python benchmarks/sequencing.py [--seeds 100] [--robot planar_2r]
+        [--time-model trapezoid] [--json out/sequencing.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+from subtask_opt import (
+    SequencingProblem,
+    SolverParams,
+    builtin_case,
+    load_arm,
+    milp_optimum,
+    solve,
+)
+from subtask_opt.exact import tour_length
+from subtask_opt.progress import progress_bar
+
+# generation at which the paper reports the optimum (its Figs. 10 and 13)
+PAPER_GENERATIONS = {"square20": 500, "random30": 800}
+REL_TOL = 1e-9
+
+
+def instances(robot: str, time_model: str) -> list[tuple[str, str, np.ndarray]]:
+    arm = load_arm(robot)
+    out = [("square20", "square20", SequencingProblem(builtin_case("square20", arm), arm,
+                                                      time_model=time_model).matrix)]
+    for g in range(10):
+        sub = builtin_case("random30", arm, seed=g)
+        out.append(("random30", f"random30/{g}",
+                    SequencingProblem(sub, arm, time_model=time_model).matrix))
+    return out
+
+
+def run_ours(matrix: np.ndarray, optimum: float, preset: str, seeds: int) -> dict:
+    problem = SequencingProblem.from_matrix(matrix)
+    params = SolverParams(preset=preset)
+    hits, gens, times = 0, [], []
+    for seed in range(seeds):
+        r = solve(problem, seed=seed, params=params)
+        times.append(r.runtime_s)
+        if r.total_time <= optimum * (1 + REL_TOL):
+            hits += 1
+            gens.append(r.history.generation_of_best())
+    return {"success": hits, "runs": seeds, "generations_to_optimum": gens, "times_s": times}
+
+
+def run_elkai(matrix: np.ndarray, optimum: float, repeats: int) -> dict | None:
+    try:
+        import elkai
+    except ImportError:
+        return None
+    scaled = np.rint(matrix / matrix[matrix > 0].min() * 1000).astype(int).tolist()
+    hits, times = 0, []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        tour = elkai.DistanceMatrix(scaled).solve_tsp()
+        times.append(time.perf_counter() - t)
+        hits += tour_length(matrix, np.array(tour[:-1])) <= optimum * (1 + 1e-6)
+    return {"success": hits, "runs": repeats, "times_s": times}
+
+
+def run_ortools(matrix: np.ndarray, optimum: float, repeats: int, limit_s: float) -> dict | None:
+    try:
+        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+    except ImportError:
+        return None
+    scaled = np.rint(matrix / matrix[matrix > 0].min() * 1000).astype(int)
+    n = len(matrix)
+    hits, times = 0, []
+    for _ in range(repeats):
+        manager = pywrapcp.RoutingIndexManager(n, 1, 0)
+        routing = pywrapcp.RoutingModel(manager)
+        def cost(i: int, j: int, manager=manager) -> int:
+            return int(scaled[manager.IndexToNode(i), manager.IndexToNode(j)])
+
+        cb = routing.RegisterTransitCallback(cost)
+        routing.SetArcCostEvaluatorOfAllVehicles(cb)
+        search = pywrapcp.DefaultRoutingSearchParameters()
+        search.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
+        search.local_search_metaheuristic = (
+            routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH)
+        search.time_limit.FromMilliseconds(int(limit_s * 1000))
+        t = time.perf_counter()
+        solution = routing.SolveWithParameters(search)
+        times.append(time.perf_counter() - t)
+        index, tour = routing.Start(0), []
+        while not routing.IsEnd(index):
+            tour.append(manager.IndexToNode(index))
+            index = solution.Value(routing.NextVar(index))
+        hits += tour_length(matrix, np.array(tour)) <= optimum * (1 + 1e-6)
+    return {"success": hits, "runs": repeats, "times_s": times}
+
+
+def _median_ms(values: list[float]) -> float:
+    return statistics.median(values) * 1e3 if values else float("nan")
+
+
+def _p90(values: list[int]) -> float:
+    return float(np.percentile(values, 90)) if values else float("nan")
+
+
+def _peer_cells(run: dict | None) -> tuple[str, float]:
+    if run is None:
+        return "  n/a ", float("nan")
+    return f"{run['success']:>3}/{run['runs']:<2}", _median_ms(run["times_s"])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", type=int, default=100)
+    ap.add_argument("--peer-repeats", type=int, default=10)
+    ap.add_argument("--ortools-limit", type=float, default=0.1,
+                    help="OR-Tools guided local search time limit per solve [s]")
+    ap.add_argument("--robot", default="planar_2r")
+    ap.add_argument("--time-model", default="trapezoid")
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+
+    cases = instances(args.robot, args.time_model)
+    t = time.perf_counter()
+    optima = [milp_optimum(m)[0] for _, _, m in cases]
+    certify_s = time.perf_counter() - t
+
+    compile_s = {}
+    for preset in ("default", "paper"):  # first calls compile (or load the numba cache)
+        t = time.perf_counter()
+        solve(SequencingProblem.from_matrix(cases[0][2]), seed=0,
+              params=SolverParams(preset=preset))
+        compile_s[preset] = time.perf_counter() - t
+
+    rows = []
+    with progress_bar(True, total=len(cases), desc="instances") as bar:
+        for (family, name, matrix), optimum in zip(cases, optima, strict=True):
+            row = {"instance": name, "family": family, "n": len(matrix), "optimum": optimum}
+            for preset in ("default", "paper"):
+                row[preset] = run_ours(matrix, optimum, preset, args.seeds)
+            row["elkai"] = run_elkai(matrix, optimum, args.peer_repeats)
+            row["ortools"] = run_ortools(matrix, optimum, args.peer_repeats, args.ortools_limit)
+            rows.append(row)
+            bar.update()
+
+    print(f"\nsequencing benchmark: robot {args.robot}, time model {args.time_model}, "
+          f"{args.seeds} seeds per preset; optima certified by MILP in {certify_s:.2f} s")
+    print("compile / cache load of the first call: "
+          + ", ".join(f"{k} {v:.2f} s" for k, v in compile_s.items()))
+    head = (f"{'instance':<12} {'optimum':>9} | {'default':>8} {'med ms':>7} {'gens':>5} | "
+            f"{'paper':>7} {'med gen':>7} {'p90 gen':>7} {'paper*':>6} {'med ms':>7} | "
+            f"{'elkai':>6} {'med ms':>7} | {'ortools':>7} {'med ms':>7}")
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        d, p, e, o = r["default"], r["paper"], r["elkai"], r["ortools"]
+        (es, et), (os_, ot) = _peer_cells(e), _peer_cells(o)
+        print(f"{r['instance']:<12} {r['optimum']:>9.4f} | "
+              f"{d['success']:>4}/{d['runs']:<3} {_median_ms(d['times_s']):>7.3f} "
+              f"{statistics.median(d['generations_to_optimum'] or [float('nan')]):>5.0f} | "
+              f"{p['success']:>3}/{p['runs']:<3} "
+              f"{statistics.median(p['generations_to_optimum'] or [float('nan')]):>7.0f} "
+              f"{_p90(p['generations_to_optimum']):>7.0f} {PAPER_GENERATIONS[r['family']]:>6} "
+              f"{_median_ms(p['times_s']):>7.2f} | {es:>6} {et:>7.2f} | {os_:>7} {ot:>7.1f}")
+    all_default = [t for r in rows for t in r["default"]["times_s"]]
+    all_elkai = [t for r in rows if r["elkai"] for t in r["elkai"]["times_s"]]
+    print(f"\ndefault preset: {sum(r['default']['success'] for r in rows)}/"
+          f"{sum(r['default']['runs'] for r in rows)} runs at the certified optimum, "
+          f"median {_median_ms(all_default):.3f} ms per solve")
+    if all_elkai:
+        print(f"elkai (LKH-3): median {_median_ms(all_elkai):.2f} ms per solve "
+              f"({_median_ms(all_elkai) / _median_ms(all_default):.1f}x the default preset)")
+    print("paper*: generation at which the paper reports reaching the optimum")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({
+            "robot": args.robot, "time_model": args.time_model, "seeds": args.seeds,
+            "compile_s": compile_s, "certify_s": certify_s, "rows": rows}, indent=1))
+        print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
