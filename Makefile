@@ -33,7 +33,12 @@ test: $(VENV)/.installed-dev
 	MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests examples
 
 bench: $(VENV)/.installed-bench
-	$(BIN)/python benchmarks/sequencing.py
+	$(BIN)/python benchmarks/sequencing.py --json $(OUT)/bench/sequencing.json
+	$(BIN)/python benchmarks/fidelity.py --json $(OUT)/bench/fidelity.json
+	$(BIN)/python benchmarks/grid.py --json $(OUT)/bench/grid.json
+	$(BIN)/python benchmarks/maklink.py --json $(OUT)/bench/maklink.json
+	$(BIN)/python benchmarks/reactive.py --json $(OUT)/bench/reactive.json
+	$(BIN)/python benchmarks/agv.py --json $(OUT)/bench/agv.json
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check subtask_opt tests benchmarks

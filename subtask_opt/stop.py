@@ -138,6 +138,17 @@ def target_threshold(criteria: list[StoppingCriterion]) -> float:
     return min(thresholds) if thresholds else -math.inf
 
 
+def kernel_limits(criteria: list[StoppingCriterion]) -> tuple[int, float]:
+    """``(stall_limit, target)`` for a kernel that enforces them itself.
+
+    The stall limit is the smallest NoImprovement (a huge number when none),
+    the target the lowest TargetCost threshold (``-inf`` when none).
+    """
+    stall = min((c.generations for c in criteria if isinstance(c, NoImprovement)),
+                default=2**62)
+    return stall, target_threshold(criteria)
+
+
 def run_in_chunks(run_chunk: Callable[[int], int], progress: Callable[[], Progress],
                   criteria: list[StoppingCriterion],
                   on_chunk: Callable[[Progress], None] | None = None) -> None:

@@ -57,11 +57,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         from ..plotting import agv as plots
 
         if args.plot:
-            import matplotlib.pyplot as plt
-
-            fig = plots.plot_run(run)
-            fig.savefig(args.plot, dpi=120, bbox_inches="tight")
-            plt.close(fig)
+            plots.save_run_figure(run, args.plot)
         if args.animate:
             plots.animate_run(run, args.animate, max_frames=args.frames)
             print(f"animation written to {args.animate}")

@@ -132,26 +132,10 @@ def _run_bench_grid(args: argparse.Namespace) -> int:
         write_json(args.json, {"seed": args.seed, "planners": list(TABLE_PLANNERS),
                                "rows": [r.to_dict() for r in rows]})
     if args.plot:
-        _plot_six(args.plot, cases, rows)
+        from ..plotting.grid import save_comparison_figure
+
+        save_comparison_figure(args.plot, cases, rows)
     return 0
-
-
-def _plot_six(path: str, cases: list[Any], rows: list[Any]) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..plotting.grid import plot_grid
-
-    fig, axes = plt.subplots(3, 2, figsize=(15, 11))
-    for ax, case in zip(axes.ravel(), cases, strict=False):
-        results = [r.result for r in rows if r.map == case.name]
-        plot_grid(case.world, results, start=case.start, goal=case.goal, ax=ax)
-    fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _run_bench_movingai(args: argparse.Namespace) -> int:

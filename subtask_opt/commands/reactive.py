@@ -90,14 +90,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         from ..plotting import reactive as rplot
 
         if args.plot:
-            import matplotlib.pyplot as plt
-
-            fig, axes = plt.subplots(2, 1, figsize=(7.0, 10.0),
-                                     gridspec_kw={"height_ratios": [3, 1]})
-            rplot.plot_run(world, run, ax=axes[0])
-            rplot.plot_memberships(run, ax=axes[1])
-            fig.savefig(ensure_parent(args.plot), dpi=110)
-            plt.close(fig)
+            rplot.save_run_figure(world, run, ensure_parent(args.plot))
         if args.animate:
             rplot.animate_run(world, run, args.animate, every=2, progress=True)
     return 0

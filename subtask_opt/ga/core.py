@@ -40,11 +40,10 @@ from numba import njit
 from ..errors import ParameterError, require_in_range, require_int, require_non_negative
 from ..result import History
 from ..stop import (
-    NoImprovement,
     Progress,
     StoppingCriterion,
+    kernel_limits,
     run_in_chunks,
-    target_threshold,
 )
 from . import registry as ops
 from .registry import OperatorSet
@@ -298,9 +297,7 @@ def run_ga(
     best = np.zeros(max_genes, dtype=np.int64)
     best_cost = np.zeros(2)  # [best so far, best of the initial population]
     counters = np.zeros(4, dtype=np.int64)
-    stall_limit = min((c.generations for c in criteria if isinstance(c, NoImprovement)),
-                      default=np.iinfo(np.int64).max)
-    target = target_threshold(criteria)
+    stall_limit, target = kernel_limits(criteria)
 
     start = time.perf_counter()
     hist_best: list[np.ndarray] = []

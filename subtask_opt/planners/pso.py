@@ -32,8 +32,8 @@ from ..stop import (
     Progress,
     StoppingCriterion,
     as_criteria,
+    kernel_limits,
     run_in_chunks,
-    target_threshold,
 )
 from . import _geometry_kernels as gk
 from . import maklink
@@ -120,9 +120,7 @@ def optimize_crossings(links: np.ndarray, start: np.ndarray, goal: np.ndarray,
     gbest_cost = np.array([pbest_cost[i0]])
     counters = np.zeros(2, dtype=np.int64)
     cfg = params.as_array()
-    stall_limit = min((c.generations for c in criteria if isinstance(c, NoImprovement)),
-                      default=np.iinfo(np.int64).max)
-    target = target_threshold(criteria)
+    stall_limit, target = kernel_limits(criteria)
 
     t0 = time.perf_counter()
     hist_best: list[np.ndarray] = []

@@ -171,3 +171,12 @@ def animate_run(run: AgvRun, out: str | Path, *, fps: int = 10, max_frames: int 
     anim.save(str(out), writer=PillowWriter(fps=fps), dpi=dpi)
     plt.close(fig)
     return out
+
+
+def save_run_figure(run: AgvRun, path: str | Path) -> None:
+    """:func:`plot_run` written to ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig = plot_run(run)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
+    plt.close(fig)

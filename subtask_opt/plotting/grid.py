@@ -74,3 +74,19 @@ def save_grid_plot(path: str | Path, world: Any, results: Sequence[Any] = (),
     ax.figure.savefig(path, dpi=120, bbox_inches="tight")
     plt.close(ax.figure)
     return path
+
+
+def save_comparison_figure(path: str | Path, cases: Sequence[Any], rows: Sequence[Any]) -> Path:
+    """The paths of every planner on each map (``bench grid --plot``), a 3 x 2 grid of maps."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 2, figsize=(15, 11))
+    for ax, case in zip(axes.ravel(), cases, strict=False):
+        results = [r.result for r in rows if r.map == case.name]
+        plot_grid(case.world, results, start=case.start, goal=case.goal, ax=ax)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -159,3 +159,14 @@ def animate_run(world: PolygonWorld, run: ReactiveRun, path: str | Path, *, fps:
             bar.update()
     plt.close(fig)
     return path
+
+
+def save_run_figure(world: PolygonWorld, run: ReactiveRun, path: str | Path) -> None:
+    """The trajectory with its beams above the chosen candidates' memberships over time."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 1, figsize=(7.0, 10.0), gridspec_kw={"height_ratios": [3, 1]})
+    plot_run(world, run, ax=axes[0])
+    plot_memberships(run, ax=axes[1])
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
