@@ -80,36 +80,56 @@ def run_elkai(matrix: np.ndarray, optimum: float, repeats: int) -> dict | None:
     return {"success": hits, "runs": repeats, "times_s": times}
 
 
-def run_ortools(matrix: np.ndarray, optimum: float, repeats: int, limit_s: float) -> dict | None:
-    try:
-        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
-    except ImportError:
+def _ortools_tour(scaled: np.ndarray, limit_s: float) -> tuple[list[int], float]:
+    """One OR-Tools guided-local-search solve; runs in a child process (see run_ortools)."""
+    from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+
+    n = len(scaled)
+    manager = pywrapcp.RoutingIndexManager(n, 1, 0)
+    routing = pywrapcp.RoutingModel(manager)
+
+    def cost(i: int, j: int) -> int:
+        return int(scaled[manager.IndexToNode(i), manager.IndexToNode(j)])
+
+    routing.SetArcCostEvaluatorOfAllVehicles(routing.RegisterTransitCallback(cost))
+    search = pywrapcp.DefaultRoutingSearchParameters()
+    search.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
+    search.local_search_metaheuristic = (
+        routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH)
+    search.time_limit.FromMilliseconds(int(limit_s * 1000))
+    t = time.perf_counter()
+    solution = routing.SolveWithParameters(search)
+    seconds = time.perf_counter() - t
+    index, tour = routing.Start(0), []
+    while not routing.IsEnd(index):
+        tour.append(manager.IndexToNode(index))
+        index = solution.Value(routing.NextVar(index))
+    return tour, seconds
+
+
+def run_ortools(matrix: np.ndarray, optimum: float, repeats: int, limit_s: float,
+                pool) -> dict | None:
+    """OR-Tools in a separate process: it and highspy (our MILP) each bundle HiGHS, and
+    the two builds cannot be loaded into one process."""
+    if pool is None:
         return None
     scaled = np.rint(matrix / matrix[matrix > 0].min() * 1000).astype(int)
-    n = len(matrix)
     hits, times = 0, []
     for _ in range(repeats):
-        manager = pywrapcp.RoutingIndexManager(n, 1, 0)
-        routing = pywrapcp.RoutingModel(manager)
-        def cost(i: int, j: int, manager=manager) -> int:
-            return int(scaled[manager.IndexToNode(i), manager.IndexToNode(j)])
-
-        cb = routing.RegisterTransitCallback(cost)
-        routing.SetArcCostEvaluatorOfAllVehicles(cb)
-        search = pywrapcp.DefaultRoutingSearchParameters()
-        search.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
-        search.local_search_metaheuristic = (
-            routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH)
-        search.time_limit.FromMilliseconds(int(limit_s * 1000))
-        t = time.perf_counter()
-        solution = routing.SolveWithParameters(search)
-        times.append(time.perf_counter() - t)
-        index, tour = routing.Start(0), []
-        while not routing.IsEnd(index):
-            tour.append(manager.IndexToNode(index))
-            index = solution.Value(routing.NextVar(index))
+        tour, seconds = pool.submit(_ortools_tour, scaled, limit_s).result()
+        times.append(seconds)
         hits += tour_length(matrix, np.array(tour)) <= optimum * (1 + 1e-6)
     return {"success": hits, "runs": repeats, "times_s": times}
+
+
+def _ortools_pool():
+    import importlib.util
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    if importlib.util.find_spec("ortools") is None:
+        return None
+    return ProcessPoolExecutor(max_workers=1, mp_context=get_context("spawn"))
 
 
 def _median_ms(values: list[float]) -> float:
@@ -130,7 +150,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, default=100)
     ap.add_argument("--peer-repeats", type=int, default=10)
-    ap.add_argument("--ortools-limit", type=float, default=0.1,
+    ap.add_argument("--ortools-limit", type=float, default=1.0,
                     help="OR-Tools guided local search time limit per solve [s]")
     ap.add_argument("--robot", default="planar_2r")
     ap.add_argument("--time-model", default="trapezoid")
@@ -150,16 +170,20 @@ def main() -> None:
         compile_s[preset] = time.perf_counter() - t
 
     rows = []
+    pool = _ortools_pool()
     with progress_bar(True, total=len(cases), desc="instances") as bar:
         for (family, name, matrix), optimum in zip(cases, optima, strict=True):
             row = {"instance": name, "family": family, "n": len(matrix), "optimum": optimum}
             for preset in ("default", "paper"):
                 row[preset] = run_ours(matrix, optimum, preset, args.seeds)
             row["elkai"] = run_elkai(matrix, optimum, args.peer_repeats)
-            row["ortools"] = run_ortools(matrix, optimum, args.peer_repeats, args.ortools_limit)
+            row["ortools"] = run_ortools(matrix, optimum, args.peer_repeats, args.ortools_limit,
+                                         pool)
             rows.append(row)
             bar.update()
 
+    if pool is not None:
+        pool.shutdown()
     print(f"\nsequencing benchmark: robot {args.robot}, time model {args.time_model}, "
           f"{args.seeds} seeds per preset; optima certified by MILP in {certify_s:.2f} s")
     print("compile / cache load of the first call: "

@@ -68,3 +68,29 @@ def test_bad_subtask_files_exit_2(tmp_path, content, needle, capsys):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert needle.lower() in err.lower()
+
+
+@pytest.mark.parametrize(("section", "key", "value"), [
+    ("cartesian_limits", "kv", -1.0), ("cartesian_limits", "ka", 0.0),
+    ("joint_limits", "acceleration", [10.0, -1.0]),
+])
+def test_non_positive_limits_of_a_urdf_robot_exit_2(tmp_path, capsys, section, key, value):
+    from importlib.resources import files
+
+    robots = files("subtask_opt.robots")
+    (tmp_path / "arm.urdf").write_text((robots / "planar_2r.urdf").read_text())
+    params = json.loads((robots / "planar_2r.json").read_text())
+    params[section][key] = value
+    (tmp_path / "arm.json").write_text(json.dumps(params))
+    assert main(["solve", "--case", "square20", "--robot", str(tmp_path / "arm.urdf")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert key in err
+
+
+def test_infinite_coordinates_exit_2(tmp_path, capsys):
+    csv = tmp_path / "inf.csv"
+    csv.write_text("x,y\n0.3,0.1\ninf,0.2\n0.25,0.3\n")
+    assert main(["solve", "--case", str(csv)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "inf" in err.lower()

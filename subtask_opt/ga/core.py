@@ -177,11 +177,7 @@ def _population_converged(costs, previous_costs, tol):
 
 @njit(cache=True)
 def _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng):
-    """Best so far in slot 0 and fresh individuals elsewhere.
-
-    Only the initial population (no best yet) is polished with ``improve``:
-    after a restart the children of the next generation are polished anyway.
-    """
+    """Best so far in slot 0 (once there is one) and fresh, improved individuals elsewhere."""
     best_len = counters[_BEST_LEN]
     first = 0
     if best_len > 0:
