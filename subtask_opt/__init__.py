@@ -12,6 +12,7 @@ Planners live in :mod:`subtask_opt.planners`; figures in :mod:`subtask_opt.plott
 """
 
 from .arm import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
+from .configurations import best_configurations
 from .errors import (
     InputDataError,
     NoPathError,
@@ -25,6 +26,7 @@ from .sequencing import PRESETS, Result, SequencingProblem, SolverParams, solve
 from .stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
 from .tasks import CASE_NAMES, SubtaskSet, builtin_case, load_subtasks, save_subtasks
 from .timing import TIME_MODELS, LegCheck, TimingResult, travel_times
+from .trajectory import TourTrajectory, tour_trajectory, validate_trajectory
 
 __version__ = "0.1.0"
 
@@ -33,6 +35,7 @@ __all__ = [
     "SubtaskSet", "builtin_case", "load_subtasks", "save_subtasks", "CASE_NAMES",
     "TIME_MODELS", "LegCheck", "TimingResult", "travel_times",
     "SequencingProblem", "SolverParams", "Result", "solve", "PRESETS",
+    "best_configurations", "TourTrajectory", "tour_trajectory", "validate_trajectory",
     "held_karp", "milp_optimum",
     "MaxGenerations", "MaxRuntime", "NoImprovement", "TargetCost",
     "History", "PlanResult",

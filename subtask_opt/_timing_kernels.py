@@ -246,27 +246,6 @@ def cartesian_matrix(points: np.ndarray, phi: np.ndarray, configs: np.ndarray,
 
 
 @njit(cache=True)
-def joint_matrix(q: np.ndarray, vel: np.ndarray, acc: np.ndarray, jerk: np.ndarray,
-                 has_jerk: bool) -> np.ndarray:
-    """N x N joint-space rest-to-rest times: max over joints of the 1-DOF optimum."""
-    n = q.shape[0]
-    out = np.zeros((n, n))
-    for i in range(n):
-        for j in range(i + 1, n):
-            t = 0.0
-            for a in range(q.shape[1]):
-                d = abs(q[j, a] - q[i, a])
-                if has_jerk:
-                    ta = scurve_time_nb(d, vel[a], acc[a], jerk[a])
-                else:
-                    ta = trapezoid_time_nb(d, vel[a], acc[a])
-                t = max(t, ta)
-            out[i, j] = t
-            out[j, i] = t
-    return out
-
-
-@njit(cache=True)
 def leg_check(points: np.ndarray, q: np.ndarray, phi: np.ndarray, configs: np.ndarray,
               kin: np.ndarray, vel: np.ndarray, kv: float, ka: float, kw: float,
               kw_dot: float, n_samples: int):
@@ -346,3 +325,35 @@ def leg_check(points: np.ndarray, q: np.ndarray, phi: np.ndarray, configs: np.nd
                 ratio[i, j] = worst
                 ratio[j, i] = worst
     return infeasible, ratio
+
+
+@njit(cache=True)
+def joint_tensor(q_both: np.ndarray, vel: np.ndarray, acc: np.ndarray, jerk: np.ndarray,
+                 has_jerk: bool) -> np.ndarray:
+    """(N, 2, N, 2) joint-space rest-to-rest times between every pair of configurations.
+
+    ``out[i, ci, j, cj]`` is the time from subtask i on branch ci to subtask j
+    on branch cj (inf where a branch does not reach its subtask: NaN rows of
+    ``q_both``, (N, 2 branches, 2 joints)).
+    """
+    n = q_both.shape[0]
+    out = np.zeros((n, 2, n, 2))
+    for i in range(n):
+        for ci in range(2):
+            for j in range(n):
+                for cj in range(2):
+                    if i == j and ci == cj:
+                        continue
+                    t = 0.0
+                    for a in range(2):
+                        d = abs(q_both[j, cj, a] - q_both[i, ci, a])
+                        if not math.isfinite(d):
+                            t = np.inf
+                            break
+                        if has_jerk:
+                            ta = scurve_time_nb(d, vel[a], acc[a], jerk[a])
+                        else:
+                            ta = trapezoid_time_nb(d, vel[a], acc[a])
+                        t = max(t, ta)
+                    out[i, ci, j, cj] = t
+    return out

@@ -19,10 +19,17 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .configurations import penalty_for
 from .errors import InputDataError, ParameterError, require_in_range, require_int
 from .ga.core import GAConfig, run_ga
-from .ga.permutation import make_aux
-from .ga.registry import EXACT_MEMETIC_OPERATORS, MEMETIC_OPERATORS, PAPER_OPERATORS
+from .ga.permutation import make_aux, neighbour_table
+from .ga.registry import (
+    EXACT_MEMETIC_OPERATORS,
+    MEMETIC_CONFIGURED_OPERATORS,
+    MEMETIC_OPERATORS,
+    PAPER_CONFIGURED_OPERATORS,
+    PAPER_OPERATORS,
+)
 from .progress import progress_bar
 from .result import History
 from .stop import MaxGenerations, NoImprovement, StoppingCriterion, as_criteria
@@ -33,6 +40,7 @@ if TYPE_CHECKING:
     from .timing import TimingResult
 
 PRESETS = ("default", "paper")
+CONFIGURATION_MODES = ("fixed", "optimize")
 
 
 @dataclass(frozen=True)
@@ -59,7 +67,7 @@ class SolverParams:
     preset: str = "default"
     population: int = 5
     convergence_tol: float = 0.01
-    grasp_share: float = 0.5
+    grasp_share: float = 0.25
     max_segment: int = 3
     neighbours: int = 8
 
@@ -81,7 +89,7 @@ class SolverParams:
         """Stopping criteria used when :func:`solve` is given none."""
         if self.preset == "paper":
             return [NoImprovement(2000), MaxGenerations(50_000)]
-        return [NoImprovement(30), MaxGenerations(50_000)]
+        return [NoImprovement(20), MaxGenerations(50_000)]
 
 
 @dataclass(frozen=True)
@@ -94,12 +102,26 @@ class SequencingProblem:
     Attributes:
         subtasks: the points to visit.
         arm: the robot (see :func:`subtask_opt.load_arm`).
-        time_model: ``"trapezoid"`` (default), ``"paper"`` or ``"joint"``
-            (see :mod:`subtask_opt.timing`).
+        time_model: ``"trapezoid"`` (default), ``"paper"``, ``"joint"`` or
+            ``"line"`` (see :mod:`subtask_opt.timing`).
         first: index of the subtask the closed tour starts and ends at
             (default: the first row).
         k: via-point fraction of the paper's time model.
-        elbow: IK branch used at every subtask (0 or 1).
+        elbow: IK branch used at every subtask (0 or 1); a subtask that branch
+            cannot reach uses the other.
+        configurations: ``"fixed"`` (default) visits every subtask on the
+            ``elbow`` branch; ``"optimize"`` (``joint`` and ``line`` models)
+            lets :func:`solve` choose the order and one elbow configuration per
+            subtask together (a generalised TSP, see
+            :mod:`subtask_opt.configurations`).
+        line_fallback: (``line``) what to do with a straight line the arm
+            cannot follow: ``"joint"`` drives that leg as a joint move,
+            ``"exclude"`` forbids it.
+
+    With ``configurations="optimize"``, :attr:`matrix` still holds the times at
+    the ``elbow`` branch; the :class:`Result` holds the matrix of the
+    configurations the solver chose, and :meth:`tour_time` decodes the best
+    configurations of the order it is given.
     """
 
     subtasks: SubtaskSet | None
@@ -108,10 +130,20 @@ class SequencingProblem:
     first: int | None = None
     k: float = 0.1
     elbow: int = 0
+    configurations: str = "fixed"
+    line_fallback: str = "joint"
     timing: TimingResult | None = field(default=None, compare=False, repr=False)
     _matrix: np.ndarray = field(default=None, init=False, compare=False, repr=False)  # type: ignore[assignment]
+    _symmetric: bool = field(default=False, init=False, compare=False, repr=False)
+    _neighbours: np.ndarray = field(default=None, init=False, compare=False, repr=False)  # type: ignore[assignment]
+    _data: np.ndarray | None = field(default=None, init=False, compare=False, repr=False)
+    _penalty: float = field(default=0.0, init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
+        if self.configurations not in CONFIGURATION_MODES:
+            raise ParameterError(
+                f"SequencingProblem.configurations must be one of "
+                f"{', '.join(CONFIGURATION_MODES)}, got {self.configurations!r}")
         if self.timing is None:
             if self.subtasks is None or self.arm is None:
                 raise ParameterError(
@@ -119,10 +151,28 @@ class SequencingProblem:
             from .timing import travel_times
 
             timing = travel_times(self.subtasks, self.arm, self.time_model, k=self.k,
-                                  elbow=self.elbow)
+                                  elbow=self.elbow, line_fallback=self.line_fallback)
             object.__setattr__(self, "timing", timing)
-        matrix = _validated_matrix(self.timing.matrix)  # type: ignore[union-attr]
+        branch_times = self.timing.branch_times  # type: ignore[union-attr]
+        if self.configurations == "optimize":
+            if branch_times is None:
+                raise ParameterError(
+                    f"SequencingProblem.configurations='optimize' needs the joint or line time "
+                    f"model (the {self.time_model!r} model does not time elbow changes)")
+            from .configurations import pack_data
+
+            data, penalty = pack_data(branch_times)
+            object.__setattr__(self, "_data", data)
+            object.__setattr__(self, "_penalty", penalty)
+        # Legs the line model excludes are the only infinite times allowed.
+        excluded = (np.isinf(self.timing.matrix)  # type: ignore[union-attr]
+                    if getattr(self.timing, "line_fallback", "joint") == "exclude"
+                    and self.time_model == "line" else None)
+        matrix = _validated_matrix(self.timing.matrix, allow_inf=excluded)  # type: ignore[union-attr]
         object.__setattr__(self, "_matrix", matrix)
+        object.__setattr__(self, "_symmetric",
+                           bool(np.allclose(matrix, matrix.T, rtol=1e-12, atol=0.0)))
+        object.__setattr__(self, "_neighbours", neighbour_table(matrix))
         n = matrix.shape[0]
         if self.first is not None and (
                 isinstance(self.first, bool) or not isinstance(self.first, (int, np.integer))
@@ -153,12 +203,36 @@ class SequencingProblem:
 
     @property
     def symmetric(self) -> bool:
-        return bool(np.allclose(self._matrix, self._matrix.T, rtol=1e-12, atol=0.0))
+        """Whether the travel times are the same both ways (all built-in models)."""
+        return self._symmetric
+
+    @property
+    def optimizes_configurations(self) -> bool:
+        """Whether :func:`solve` chooses the elbow configurations."""
+        return self._data is not None
 
     def tour_time(self, order: np.ndarray) -> float:
-        """Total time of the closed tour visiting ``order`` (validated)."""
+        """Total time of the closed tour visiting ``order`` (validated).
+
+        With ``configurations="optimize"``: the time with the best
+        configurations for that order (see :meth:`decode`).
+        """
         order = _validated_order(order, self.size)
+        if self.optimizes_configurations:
+            return self.decode(order)[0]
         return float(np.sum(self._matrix[order, np.roll(order, -1)]))
+
+    def decode(self, order: np.ndarray) -> tuple[float, np.ndarray]:
+        """``(tour time, configurations)``: the best elbow configurations for ``order``.
+
+        For a problem with fixed configurations these are the fixed ones.
+        """
+        order = _validated_order(order, self.size)
+        if not self.optimizes_configurations:
+            return self.tour_time(order), np.asarray(self.timing.configurations)  # type: ignore[union-attr]
+        from .configurations import best_configurations
+
+        return best_configurations(order, self.timing.branch_times)  # type: ignore[union-attr]
 
 
 @dataclass(frozen=True)
@@ -179,7 +253,11 @@ class Result:
         preset, time_model, robot: what was solved and how.
         configurations: the IK branch used at each subtask (by index).
         infeasible_legs: the joint-limit check of the straight-line legs for
-            the Cartesian models (``None`` for the joint model).
+            the Cartesian models; for the ``line`` model, the tour's legs whose
+            straight line is infeasible (``None`` for the joint model).
+        leg_moves: how each leg is driven: ``"line"`` (straight line) or
+            ``"joint"`` (joint-space move); None for a custom matrix.
+        configurations_mode: ``"fixed"`` or ``"optimize"`` (chosen by the solver).
     """
 
     order: np.ndarray
@@ -196,6 +274,14 @@ class Result:
     robot: str
     configurations: np.ndarray
     infeasible_legs: dict[str, Any] | None = None
+    leg_moves: tuple[str, ...] | None = None
+    configurations_mode: str = "fixed"
+
+    @property
+    def configuration_changes(self) -> int:
+        """Legs whose two ends use different elbow configurations."""
+        c = self.configurations[self.order]
+        return int(np.sum(c != np.roll(c, -1)))
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -206,6 +292,10 @@ class Result:
             f"{self.runtime_s * 1e3:.2f} ms)",
             "order: " + " ".join(str(int(i)) for i in self.order),
         ]
+        if self.configurations_mode == "optimize":
+            c = self.configurations[self.order]
+            lines.append("elbow: " + " ".join("du"[int(b)] for b in c)
+                         + f"  (d down, u up; {self.configuration_changes} changes)")
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
@@ -223,6 +313,8 @@ class Result:
             "time_model": self.time_model,
             "robot": self.robot,
             "configurations": [int(c) for c in self.configurations],
+            "configurations_mode": self.configurations_mode,
+            "leg_moves": None if self.leg_moves is None else list(self.leg_moves),
             "infeasible_legs": self.infeasible_legs,
             "history": self.history.to_dict(),
         }
@@ -250,12 +342,22 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
     matrix = problem.matrix
     n = problem.size
     paper = params.preset == "paper"
-    if paper:
-        operators = PAPER_OPERATORS
+    configured = problem.optimizes_configurations
+    if configured:
+        data = problem._data
+        operators = PAPER_CONFIGURED_OPERATORS if paper else MEMETIC_CONFIGURED_OPERATORS
+        neighbours = neighbour_table(data[:, :n])
     else:
-        operators = MEMETIC_OPERATORS if problem.symmetric else EXACT_MEMETIC_OPERATORS
-    aux = make_aux(matrix, nearest_fallback=not paper, grasp_share=params.grasp_share,
-                   max_segment=params.max_segment, neighbours=params.neighbours)
+        # a GA tour may not use an excluded leg: a finite penalty keeps the costs comparable
+        data = np.where(np.isfinite(matrix), matrix, penalty_for(matrix))
+        neighbours = problem._neighbours
+        if paper:
+            operators = PAPER_OPERATORS
+        else:
+            operators = MEMETIC_OPERATORS if problem.symmetric else EXACT_MEMETIC_OPERATORS
+    aux = make_aux(neighbours, nearest_fallback=not paper,
+                   grasp_share=params.grasp_share, max_segment=params.max_segment,
+                   neighbours=params.neighbours)
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
                       mutation_rate=0.0, restart_on_convergence=True,
                       convergence_tol=params.convergence_tol)
@@ -268,12 +370,36 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
             done[0] = p.generation
             bar.set_postfix_str(f"best {p.best_cost:.4f}")
 
-        outcome = run_ga(operators, config, matrix, aux, max_genes=n, seed=int(seed),
+        outcome = run_ga(operators, config, data, aux, max_genes=n, seed=int(seed),
                          criteria=criteria, on_chunk=on_chunk)
     order = _rotate(outcome.genes, problem.first if problem.first is not None else 0)
-    legs = matrix[order, np.roll(order, -1)]
     timing = problem.timing
-    leg_check = getattr(timing, "leg_check", None)
+    configs = np.asarray(timing.configurations)  # type: ignore[union-attr]
+    if configured:
+        from .configurations import induced_matrix
+
+        _, configs = problem.decode(order)
+        matrix = induced_matrix(timing.branch_times, configs)  # type: ignore[union-attr]
+        matrix.setflags(write=False)
+    legs = matrix[order, np.roll(order, -1)]
+    if not np.all(np.isfinite(legs)):
+        from .errors import NoPathError
+
+        k = int(np.flatnonzero(~np.isfinite(legs))[0])
+        raise NoPathError(
+            f"no closed tour avoids the excluded straight lines (the best one needs the "
+            f"impossible line {order[k]} -> {order[(k + 1) % n]}); use line_fallback='joint' "
+            "to drive such legs as joint moves")
+    leg_moves = None
+    moves = timing.moves(configs) if hasattr(timing, "moves") else None  # type: ignore[union-attr]
+    if moves is not None:
+        names = {0: "joint", 1: "line"}
+        leg_moves = tuple(names[int(m)] for m in moves[order, np.roll(order, -1)])
+    if problem.time_model == "line":
+        infeasible = timing.line_summary(order, configs)  # type: ignore[union-attr]
+    else:
+        leg_check = getattr(timing, "leg_check", None)
+        infeasible = leg_check.to_dict() if leg_check is not None else None
     return Result(
         order=order,
         total_time=float(np.sum(legs)),
@@ -287,8 +413,10 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
         preset=params.preset,
         time_model=problem.time_model,
         robot=problem.arm.name if problem.arm is not None else "custom",
-        configurations=np.asarray(timing.configurations),  # type: ignore[union-attr]
-        infeasible_legs=leg_check.to_dict() if leg_check is not None else None,
+        configurations=configs,
+        infeasible_legs=infeasible,
+        leg_moves=leg_moves,
+        configurations_mode="optimize" if configured else "fixed",
     )
 
 
@@ -297,13 +425,13 @@ def _rotate(tour: np.ndarray, first: int) -> np.ndarray:
     return np.roll(np.asarray(tour, dtype=np.int64), -start)
 
 
-def _validated_matrix(matrix: np.ndarray) -> np.ndarray:
+def _validated_matrix(matrix: np.ndarray, allow_inf: np.ndarray | None = None) -> np.ndarray:
     m = np.array(matrix, dtype=float)
     if m.ndim != 2 or m.shape[0] != m.shape[1]:
         raise InputDataError(f"travel-time matrix must be square, got shape {m.shape}")
     if m.shape[0] < 3:
         raise InputDataError(f"need at least 3 subtasks, got {m.shape[0]}")
-    bad = np.argwhere(~np.isfinite(m))
+    bad = np.argwhere(~np.isfinite(m) & (True if allow_inf is None else ~allow_inf))
     if bad.size:
         i, j = bad[0]
         raise InputDataError(

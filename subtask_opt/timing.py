@@ -1,6 +1,6 @@
 """Time models: the N x N matrix of minimum rest-to-rest travel times between subtasks.
 
-Three models (:data:`TIME_MODELS`):
+Four models (:data:`TIME_MODELS`):
 
 ``paper``
     Eq. (6)-(19) of the source paper as SPEC.md section 1 restates them:
@@ -17,6 +17,19 @@ Three models (:data:`TIME_MODELS`):
     Joint-space rest-to-rest: the max over joints of the per-joint optimum,
     a trapezoid, or the jerk-limited S-curve when the arm has jerk limits
     (what ruckig computes for a 1-DOF move), on the chosen elbow branch.
+``line``
+    The straight Cartesian line, traversed as fast as the joint velocity and
+    acceleration limits and the Cartesian limits (Kv, Ka, and Kw, Kw_dot on the
+    tool angle, which follows the arm) allow together: a numerical time-optimal
+    path parameterisation (:mod:`subtask_opt._line_kernels`). A line the arm
+    cannot follow (through the inner disc, past a joint limit, through a
+    singularity, or between different elbow branches) is replaced by a joint
+    move (``line_fallback="joint"``, the default) or excluded
+    (``line_fallback="exclude"``: infinite time).
+
+For ``joint`` and ``line`` the result also holds the times between every pair
+of *configurations* (:attr:`TimingResult.branch_times`), from which
+:mod:`subtask_opt.configurations` chooses one elbow branch per subtask.
 
 The Cartesian models drive a straight line that the arm may not be able to
 follow: :class:`LegCheck` reports the legs that leave the workspace of their
@@ -30,8 +43,10 @@ from typing import Any
 
 import numpy as np
 
+from subtask_opt import _line_kernels as _lk
 from subtask_opt import _timing_kernels as _k
 from subtask_opt.arm import BRANCH_NAMES, Arm
+from subtask_opt.configurations import gather
 from subtask_opt.errors import (
     ParameterError,
     UnreachableError,
@@ -42,7 +57,17 @@ from subtask_opt.errors import (
 )
 from subtask_opt.tasks import SubtaskSet
 
-TIME_MODELS: tuple[str, ...] = ("paper", "trapezoid", "joint")
+TIME_MODELS: tuple[str, ...] = ("paper", "trapezoid", "joint", "line")
+LINE_FALLBACKS: tuple[str, ...] = ("joint", "exclude")
+# How a leg between two configurations is driven (TimingResult.branch_moves).
+MOVE_NONE, MOVE_JOINT, MOVE_LINE = -1, 0, 1
+LINE_STATUS_NAMES: dict[int, str] = {
+    _lk.LINE_OK: "ok",
+    _lk.LINE_ANNULUS: "leaves the reachable annulus",
+    _lk.LINE_JOINT_LIMIT: "passes a joint limit",
+    _lk.LINE_SINGULAR: "passes a singularity",
+    4: "changes elbow branch",
+}
 
 
 def trapezoid_time(distance: float, vmax: float, amax: float) -> float:
@@ -157,7 +182,9 @@ class TimingResult:
     """Output of :func:`travel_times`.
 
     Attributes:
-        matrix: (N, N) minimum rest-to-rest travel times (s), symmetric, zero diagonal.
+        matrix: (N, N) minimum rest-to-rest travel times (s), symmetric, zero
+            diagonal, for the elbow branches in ``configurations`` (inf for a
+            leg the ``line`` model excludes).
         model: the time model's name.
         configurations: (N,) int64 elbow branch used at each subtask (0 down, 1 up).
         leg_check: joint check of the straight legs (Cartesian models with
@@ -165,6 +192,17 @@ class TimingResult:
         joint_positions: (N, 2) joint angles at each subtask on its branch
             (None for a matrix that came from elsewhere).
         tool_angles: (N,) tool angles the Cartesian models used (rad), or None.
+        branch_times: (``joint`` and ``line``) (N, 2, N, 2) time from subtask
+            i on branch ci to subtask j on branch cj, ``[i, ci, j, cj]``; inf
+            where a branch does not reach its subtask or the leg is excluded.
+        branch_moves: (N, 2, N, 2) int8 how each of those legs is driven:
+            :data:`MOVE_LINE`, :data:`MOVE_JOINT` or :data:`MOVE_NONE`.
+        branch_joints: (N, 2, 2) joint angles of every subtask on both
+            branches (NaN where a branch does not reach it).
+        line_status: (``line``) (N, N, 2) int64 why the straight line i-j on
+            branch c is infeasible (0 feasible; keys of :data:`LINE_STATUS_NAMES`).
+        line_fallback: (``line``) ``"joint"`` or ``"exclude"``.
+        line_grid: (``line``) intervals of the path discretisation.
     """
 
     matrix: np.ndarray
@@ -173,6 +211,51 @@ class TimingResult:
     leg_check: LegCheck | None = None
     joint_positions: np.ndarray | None = None
     tool_angles: np.ndarray | None = None
+    branch_times: np.ndarray | None = None
+    branch_moves: np.ndarray | None = None
+    branch_joints: np.ndarray | None = None
+    line_status: np.ndarray | None = None
+    line_fallback: str = "joint"
+    line_grid: int = 0
+
+    def moves(self, configurations: Any = None) -> np.ndarray | None:
+        """(N, N) int8 move kind of every leg for the given (default: own) configurations."""
+        if self.branch_moves is None:
+            return None
+        c = self.configurations if configurations is None else np.asarray(configurations)
+        return gather(self.branch_moves, c.astype(np.int64))
+
+    def line_failure(self, i: int, j: int, ci: int, cj: int) -> str | None:
+        """Why the straight line from (i, ci) to (j, cj) is not driven, or None if it is."""
+        if self.line_status is None:
+            return None
+        if ci != cj:
+            return LINE_STATUS_NAMES[4]
+        st = int(self.line_status[i, j, ci])
+        return None if st == _lk.LINE_OK else LINE_STATUS_NAMES[st]
+
+    def line_summary(self, order: Any, configurations: Any) -> dict[str, Any] | None:
+        """(``line``) JSON-ready report of the tour's legs whose straight line is infeasible."""
+        if self.line_status is None:
+            return None
+        order = np.asarray(order)
+        c = np.asarray(configurations)
+        legs = []
+        n = len(order)
+        for k in range(n):
+            a, b = int(order[k]), int(order[(k + 1) % n])
+            why = self.line_failure(a, b, int(c[a]), int(c[b]))
+            if why is not None:
+                legs.append({"leg": k, "from": a, "to": b, "reason": why,
+                             "replaced_by": "joint move" if self.line_fallback == "joint"
+                             else None})
+        upper = np.triu(np.ones((len(c), len(c)), dtype=bool), 1)
+        same = c[:, None] == c[None, :]
+        idx = np.arange(len(c))
+        status = self.line_status[idx[:, None], idx[None, :], c[:, None]]
+        bad = upper & (~same | (status != _lk.LINE_OK))
+        return {"fallback": self.line_fallback, "n_lines": int(upper.sum()),
+                "n_infeasible_lines": int(bad.sum()), "tour_legs_not_straight": legs}
 
 
 def _explicit_configurations(configurations: Any, q_both: np.ndarray, points: np.ndarray,
@@ -194,7 +277,8 @@ def _explicit_configurations(configurations: Any, q_both: np.ndarray, points: np
 
 def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k: float = 0.1,
                  elbow: int = 0, configurations: Any = None, check_legs: bool = True,
-                 n_samples: int = 64) -> TimingResult:
+                 n_samples: int = 64, line_fallback: str = "joint",
+                 line_grid: int = 512) -> TimingResult:
     """The N x N matrix of minimum rest-to-rest travel times under a time model.
 
     Args:
@@ -209,9 +293,14 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
             overriding ``elbow``; each must reach its subtask.
         check_legs: run the :class:`LegCheck` (Cartesian models only).
         n_samples: samples per straight leg in the check (>= 2).
+        line_fallback: (``line``) ``"joint"`` drives an infeasible line as a
+            joint move, ``"exclude"`` gives it an infinite time.
+        line_grid: (``line``) intervals of the path discretisation (>= 16);
+            the time converges from above as 1/line_grid (512: within 0.3%).
 
     Raises:
-        ParameterError: unknown model, bad k, elbow or n_samples.
+        ParameterError: unknown model, bad k, elbow, n_samples, line_fallback
+            or line_grid.
         UnreachableError: a subtask no branch reaches (names its index).
     """
     if model not in TIME_MODELS:
@@ -226,6 +315,10 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
         raise ParameterError(f"travel_times.elbow must be 0 (elbow-down) or 1 (elbow-up), "
                              f"got {elbow!r}")
     require_int("travel_times", "n_samples", n_samples, 2)
+    if line_fallback not in LINE_FALLBACKS:
+        raise ParameterError(f"travel_times.line_fallback must be one of "
+                             f"{', '.join(LINE_FALLBACKS)}, got {line_fallback!r}")
+    require_int("travel_times", "line_grid", line_grid, 16)
     # Writable C-contiguous copies: one numba signature per kernel.
     points = np.array(subtasks.points, dtype=np.float64, order="C")
     arm.check_reachable(points)
@@ -245,10 +338,11 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
     cl = arm.cartesian_limits
     jl = arm.joint_limits
     leg_check = None
-    if model == "joint":
-        jerk = np.zeros(2) if jl.jerk is None else np.array(jl.jerk)
-        matrix = _k.joint_matrix(q, np.array(jl.velocity), np.array(jl.acceleration), jerk,
-                                 jl.jerk is not None)
+    extra: dict[str, Any] = {}
+    if model in ("joint", "line"):
+        extra = _branch_tensors(points, q_both, arm, model, line_fallback, line_grid)
+        matrix = np.ascontiguousarray(gather(extra["branch_times"], configs))
+        np.fill_diagonal(matrix, 0.0)
     else:
         matrix = _k.cartesian_matrix(points, phi, configs, arm.kinematics, cl.kv, cl.ka, cl.kw,
                                      cl.kw_dot, model == "paper", float(k),
@@ -258,10 +352,49 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
                                           np.array(jl.velocity), cl.kv, cl.ka, cl.kw,
                                           cl.kw_dot, n_samples)
             leg_check = LegCheck(outside, ratio)
-    for arr in (matrix, configs, q, phi):
+    for arr in (matrix, configs, q, phi, *extra.values()):
         arr.setflags(write=False)
-    return TimingResult(matrix, model, configs, leg_check, q, phi)
+    if model == "line":
+        extra.update(line_fallback=line_fallback, line_grid=line_grid)
+    return TimingResult(matrix, model, configs, leg_check, q, phi, **extra)
 
 
-__all__ = ["LegCheck", "TIME_MODELS", "TimingResult", "scurve_time", "trapezoid_time",
+def _branch_tensors(points: np.ndarray, q_both: np.ndarray, arm: Arm, model: str,
+                    line_fallback: str, line_grid: int) -> dict[str, np.ndarray]:
+    """Times and move kinds between every pair of configurations (``joint``/``line``)."""
+    cl = arm.cartesian_limits
+    jl = arm.joint_limits
+    vel = np.array(jl.velocity)
+    acc = np.array(jl.acceleration)
+    jerk = np.zeros(2) if jl.jerk is None else np.array(jl.jerk)
+    q_both = np.ascontiguousarray(q_both)
+    joint = _k.joint_tensor(q_both, vel, acc, jerk, jl.jerk is not None)
+    out = {"branch_joints": q_both}
+    if model == "joint":
+        out["branch_times"] = joint
+        out["branch_moves"] = np.where(np.isfinite(joint), MOVE_JOINT, MOVE_NONE).astype(np.int8)
+        return out
+    line, status = _lk.line_tensor(points, q_both, arm.kinematics, vel, acc, cl.kv, cl.ka,
+                                   cl.kw, cl.kw_dot, int(line_grid))
+    n = len(points)
+    line4 = np.full((n, 2, n, 2), np.inf)
+    for c in range(2):
+        line4[:, c, :, c] = line[:, :, c]
+    use_line = np.isfinite(line4)
+    if line_fallback == "joint":
+        times = np.where(use_line, line4, joint)
+        moves = np.where(use_line, MOVE_LINE, np.where(np.isfinite(joint), MOVE_JOINT,
+                                                       MOVE_NONE))
+    else:
+        times = line4
+        moves = np.where(use_line, MOVE_LINE, MOVE_NONE)
+    idx = np.arange(n)
+    for c in range(2):  # staying put: no move at all
+        times[idx, c, idx, c] = 0.0
+    out.update(branch_times=times, branch_moves=moves.astype(np.int8), line_status=status)
+    return out
+
+
+__all__ = ["LINE_FALLBACKS", "LINE_STATUS_NAMES", "LegCheck", "MOVE_JOINT", "MOVE_LINE",
+           "MOVE_NONE", "TIME_MODELS", "TimingResult", "scurve_time", "trapezoid_time",
            "travel_times"]

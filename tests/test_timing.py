@@ -16,6 +16,7 @@ from subtask_opt.arm import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load
 from subtask_opt.errors import ParameterError, UnreachableError
 from subtask_opt.tasks import SubtaskSet, builtin_case, random_subtasks
 from subtask_opt.timing import (
+    MOVE_LINE,
     TIME_MODELS,
     LegCheck,
     scurve_time,
@@ -144,6 +145,10 @@ def test_matrix_invariants(robot: str, model: str, seed: int, n: int, elbow: int
         dq = np.abs(res.joint_positions[:, None] - res.joint_positions[None])
         assert np.all(m >= (dq / arm.joint_limits.velocity).max(axis=2) - 1e-12)
         assert res.leg_check is None
+    elif model == "line":  # straight lines obey Kv; joint moves (fallback) only joint limits
+        line = res.moves() == MOVE_LINE
+        assert np.all(m[line] >= d[line] / arm.cartesian_limits.kv)
+        assert res.leg_check is None and res.line_status.shape == (n, n, 2)
     else:
         assert isinstance(res.leg_check, LegCheck)
 

@@ -118,7 +118,7 @@ def solution_figure(result: Result, problem: SequencingProblem) -> Figure:
     t0 = problem.tour_time(initial)
     plot_tour(problem, initial, ax=axes[0], draw_arm=False,
               title=f"input order: {t0:.3f} s")
-    plot_tour(problem, result.order, ax=axes[1],
+    plot_tour(problem, result.order, ax=axes[1], configurations=result.configurations,
               title=f"optimised ({result.time_model} model): {result.total_time:.3f} s")
     plot_convergence(result, ax=axes[2])
     fig.tight_layout()
