@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ._common import non_negative_int, positive_float, positive_int, write_json
 
 
@@ -108,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     print(result.summary())
     if not args.quiet:
         print(format_leg_table(result, problem))
-    _warn_infeasible(result)
+    _warn_infeasible(result, problem)
     trajectory, report = (_executed(args, problem, result) if args.trajectory or args.animate
                           else (None, None))
     if args.json:
@@ -186,7 +188,7 @@ def format_leg_table(result, problem) -> str:
             notes.append("elbow change")
         if check is not None:
             if check.outside_annulus[a, b]:
-                notes.append("line leaves the workspace")
+                notes.append("straight line impossible (inner disc, joint limit or elbow change)")
             elif check.speed_ratio[a, b] > 1.0:
                 notes.append(f"joint speed x{check.speed_ratio[a, b]:.2f} over limit")
         why = timing.line_failure(a, b, ca, cb) if problem.time_model == "line" else None
@@ -197,14 +199,19 @@ def format_leg_table(result, problem) -> str:
     return "\n".join(rows)
 
 
-def _warn_infeasible(result) -> None:
-    info = result.infeasible_legs
-    if not info:
+def _warn_infeasible(result, problem) -> None:
+    """Warn when the tour's straight lines would break the arm's joint limits."""
+    check = problem.timing.leg_check
+    if check is None:
         return
-    n_out = info.get("n_infeasible", 0)
-    n_fast = info.get("n_overspeed", 0)
-    if n_out or n_fast:
-        print(f"warning: of the {info.get('n_legs', 0)} straight lines between subtasks, "
-              f"{n_out} cannot be driven (inner disc, joint limit or elbow change) and "
-              f"{n_fast} exceed a joint speed limit (worst x{info.get('worst_ratio', 0):.2f}); "
-              "use --time-model joint or line for times the arm can achieve", file=sys.stderr)
+    order = result.order
+    nxt = np.roll(order, -1)
+    impossible = int(np.count_nonzero(check.outside_annulus[order, nxt]))
+    over = check.speed_ratio[order, nxt]
+    fast = int(np.count_nonzero((over > 1.0) & ~check.outside_annulus[order, nxt]))
+    if impossible or fast:
+        worst = float(np.max(np.where(np.isfinite(over), over, 0.0)))
+        print(f"warning: {impossible + fast} of the tour's {len(order)} straight-line legs break "
+              f"a joint limit ({impossible} impossible as a straight line, {fast} over a joint "
+              f"speed limit, worst x{worst:.2f}); use --time-model joint or line for times the "
+              "arm can achieve", file=sys.stderr)
