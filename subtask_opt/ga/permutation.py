@@ -357,6 +357,75 @@ def local_search(genes, length, data, aux):
 
 
 @njit(cache=True)
+def _two_opt_move(a, genes, pos, n, data, aux, k_nb, touched):
+    """Apply the first improving 2-opt move that links ``a`` to one of its nearest
+    cities; write the four cities it touched into ``touched`` and return 4 (0: none)."""
+    eps = 1e-12
+    for side in range(2):
+        ia = pos[a]
+        b = genes[(ia + 1) % n] if side == 0 else genes[(ia - 1) % n]
+        d_ab = data[a, b]
+        for t in range(k_nb):
+            c = int(aux[_AUX_TABLE + a * k_nb + t])
+            d_ac = data[a, c]
+            if d_ac >= d_ab - eps:  # neighbours are sorted: no shorter new edge follows
+                break
+            ic = pos[c]
+            d = genes[(ic + 1) % n] if side == 0 else genes[(ic - 1) % n]
+            if c == b or d == a:
+                continue
+            if d_ac + data[b, d] - d_ab - data[c, d] < -eps:
+                if side == 0:  # a b ... c d  ->  a c ... b d
+                    _reverse(genes, pos, n, (ia + 1) % n, ic)
+                else:  # d c ... b a  ->  d b ... c a
+                    _reverse(genes, pos, n, ic, (ia - 1) % n)
+                touched[0], touched[1], touched[2], touched[3] = a, b, c, d
+                return 4
+    return 0
+
+
+@njit(cache=True)
+def _or_opt_move(a, genes, pos, n, data, aux, k_nb, max_seg, scratch, touched):
+    """Apply the first improving move of a run of 1..max_seg cities starting or
+    ending at ``a`` next to one of the nearest cities of its end points (either
+    way round); write the six cities it touched into ``touched`` and return 6 (0: none)."""
+    eps = 1e-12
+    for seg in range(1, max_seg + 1):
+        for end in range(2):
+            i = pos[a] if end == 0 else (pos[a] - seg + 1) % n
+            s0 = genes[i]
+            s1 = genes[(i + seg - 1) % n]
+            p = genes[(i - 1) % n]
+            q = genes[(i + seg) % n]
+            removed = data[p, s0] + data[s1, q] - data[p, q]
+            if removed <= eps:
+                continue
+            for which in range(2):
+                s = s0 if which == 0 else s1
+                for t in range(k_nb):
+                    c = int(aux[_AUX_TABLE + s * k_nb + t])
+                    if data[s, c] >= removed - eps:
+                        break
+                    ic = pos[c]
+                    if (ic - i) % n < seg:  # c is inside the run
+                        continue
+                    for after in range(2):  # the edge after c, then the edge before it
+                        x_pos = ic if after == 1 else (ic - 1) % n
+                        if (x_pos - i) % n < seg or ((x_pos + 1) - i) % n < seg:
+                            continue
+                        x = genes[x_pos]
+                        y = genes[(x_pos + 1) % n]
+                        fwd = data[x, s0] + data[s1, y]
+                        rev = data[x, s1] + data[s0, y]
+                        if removed + data[x, y] - min(fwd, rev) > eps:
+                            _move_run(genes, pos, n, i, seg, x_pos, rev < fwd, scratch)
+                            touched[0], touched[1], touched[2] = p, q, s0
+                            touched[3], touched[4], touched[5] = s1, x, y
+                            return 6
+    return 0
+
+
+@njit(cache=True)
 def local_search_around(genes, length, data, aux, active, n_active):
     """2-opt and Or-opt for symmetric costs, starting from the cities ``active[:n_active]``.
 
@@ -368,13 +437,13 @@ def local_search_around(genes, length, data, aux, active, n_active):
         return exact_local_search(genes, length, data, aux)
     k_nb = int(aux[AUX_NEIGHBOURS])
     max_seg = min(int(aux[AUX_MAX_SEGMENT]), n - 3)
-    eps = 1e-12
     pos = np.empty(n, dtype=np.int64)
     for i in range(n):
         pos[genes[i]] = i
     queue = np.empty(n, dtype=np.int64)
     queued = np.zeros(n, dtype=np.bool_)
     scratch = np.empty(n, dtype=genes.dtype)
+    touched = np.empty(6, dtype=np.int64)
     head = 0
     tail = 0
     for i in range(n_active):
@@ -387,83 +456,12 @@ def local_search_around(genes, length, data, aux, active, n_active):
         a = queue[head % n]
         head += 1
         queued[a] = False
-        improved = False
-        # 2-opt: new edge (a, c) for c among a's nearest
-        for side in range(2):
-            ia = pos[a]
-            b = genes[(ia + 1) % n] if side == 0 else genes[(ia - 1) % n]
-            d_ab = data[a, b]
-            for t in range(k_nb):
-                c = int(aux[_AUX_TABLE + a * k_nb + t])
-                d_ac = data[a, c]
-                if d_ac >= d_ab - eps:
-                    break
-                ic = pos[c]
-                d = genes[(ic + 1) % n] if side == 0 else genes[(ic - 1) % n]
-                if c == b or d == a:
-                    continue
-                delta = d_ac + data[b, d] - d_ab - data[c, d]
-                if delta < -eps:
-                    if side == 0:  # a b ... c d  ->  a c ... b d
-                        _reverse(genes, pos, n, (ia + 1) % n, ic)
-                    else:  # d c ... b a  ->  d b ... c a
-                        _reverse(genes, pos, n, ic, (ia - 1) % n)
-                    tail = _push(queue, queued, tail, n, a)
-                    tail = _push(queue, queued, tail, n, b)
-                    tail = _push(queue, queued, tail, n, c)
-                    tail = _push(queue, queued, tail, n, d)
-                    improved = True
-                    break
-            if improved:
-                break
-        if improved:
-            continue
-        # Or-opt: a run of 1..max_seg cities starting or ending at a moves next to
-        # one of the nearest cities of its end points
-        for seg in range(1, max_seg + 1):
-            for end in range(2):
-                i = pos[a] if end == 0 else (pos[a] - seg + 1) % n
-                s0 = genes[i]
-                s1 = genes[(i + seg - 1) % n]
-                p = genes[(i - 1) % n]
-                q = genes[(i + seg) % n]
-                removed = data[p, s0] + data[s1, q] - data[p, q]
-                if removed <= eps:
-                    continue
-                for which in range(2):
-                    s = s0 if which == 0 else s1
-                    for t in range(k_nb):
-                        c = int(aux[_AUX_TABLE + s * k_nb + t])
-                        if data[s, c] >= removed - eps:
-                            break
-                        ic = pos[c]
-                        if (ic - i) % n < seg:  # c is inside the run
-                            continue
-                        # try the edge after c and the edge before c
-                        for after in range(2):
-                            x_pos = ic if after == 1 else (ic - 1) % n
-                            x = genes[x_pos]
-                            y = genes[(x_pos + 1) % n]
-                            if (x_pos - i) % n < seg or ((x_pos + 1) - i) % n < seg:
-                                continue
-                            fwd = data[x, s0] + data[s1, y]
-                            rev = data[x, s1] + data[s0, y]
-                            gain = removed + data[x, y] - min(fwd, rev)
-                            if gain > eps:
-                                _move_run(genes, pos, n, i, seg, x_pos, rev < fwd, scratch)
-                                for city in (p, q, s0, s1, x, y):
-                                    tail = _push(queue, queued, tail, n, city)
-                                improved = True
-                                break
-                        if improved:
-                            break
-                    if improved:
-                        break
-                if improved:
-                    break
-            if improved:
-                break
-        if improved:
+        moved = _two_opt_move(a, genes, pos, n, data, aux, k_nb, touched)
+        if moved == 0:
+            moved = _or_opt_move(a, genes, pos, n, data, aux, k_nb, max_seg, scratch, touched)
+        if moved > 0:
+            for k in range(moved):
+                tail = _push(queue, queued, tail, n, touched[k])
             tail = _push(queue, queued, tail, n, a)
     return n
 
