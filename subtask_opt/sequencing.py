@@ -20,7 +20,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .configurations import penalty_for
-from .errors import InputDataError, ParameterError, require_in_range, require_int
+from .errors import (
+    InputDataError,
+    NoPathError,
+    ParameterError,
+    require_in_range,
+    require_int,
+)
 from .ga.core import GAConfig, run_ga
 from .ga.permutation import make_aux, neighbour_table
 from .ga.registry import (
@@ -385,15 +391,13 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
         matrix.setflags(write=False)
     legs = matrix[order, np.roll(order, -1)]
     if not np.all(np.isfinite(legs)):
-        from .errors import NoPathError
-
         k = int(np.flatnonzero(~np.isfinite(legs))[0])
         raise NoPathError(
             f"no closed tour avoids the excluded straight lines (the best one needs the "
             f"impossible line {order[k]} -> {order[(k + 1) % n]}); use line_fallback='joint' "
             "to drive such legs as joint moves")
     leg_moves = None
-    moves = timing.moves(configs) if hasattr(timing, "moves") else None  # type: ignore[union-attr]
+    moves = timing.moves(configs)  # type: ignore[union-attr]
     if moves is not None:
         names = {0: "joint", 1: "line"}
         leg_moves = tuple(names[int(m)] for m in moves[order, np.roll(order, -1)])
