@@ -66,11 +66,6 @@ def check_graph_invariants(world: PolygonWorld, graph: maklink.MaklinkGraph) -> 
 
 
 @pytest.fixture(scope="module")
-def seed003() -> PolygonWorld:
-    return PolygonWorld.builtin("seed003")
-
-
-@pytest.fixture(scope="module")
 def graph003(seed003) -> maklink.MaklinkGraph:
     return maklink.graph_for(seed003)
 

@@ -19,11 +19,6 @@ from .test_visibility import oracle_length
 from .test_world import convex_worlds, free_point, path_is_free_convex
 
 
-@pytest.fixture(scope="module")
-def seed003() -> PolygonWorld:
-    return PolygonWorld.builtin("seed003")
-
-
 @pytest.mark.parametrize("start, goal, stated", [
     ((20, 20), (320, 320), 425.4666),
     ((10, 340), (340, 10), 479.5948),

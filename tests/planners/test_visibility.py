@@ -34,11 +34,6 @@ def oracle_length(world: PolygonWorld, start, goal) -> float:
     return float(shortest_path(dense, method="D", directed=False, indices=0)[1])
 
 
-@pytest.fixture(scope="module")
-def seed003() -> PolygonWorld:
-    return PolygonWorld.builtin("seed003")
-
-
 # The two reference optima stated in the issue (computed there independently).
 @pytest.mark.parametrize("start, goal, stated", [
     ((20, 20), (320, 320), 425.4666),

@@ -110,11 +110,6 @@ def free_point(draw, world: PolygonWorld) -> np.ndarray:
     return p
 
 
-@pytest.fixture(scope="module")
-def seed003() -> PolygonWorld:
-    return PolygonWorld.builtin("seed003")
-
-
 # -- the built-in world --------------------------------------------------------------
 
 
