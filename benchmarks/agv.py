@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt.planners.agv import AgvParams, simulate
-from subtask_opt.planners.agv_scenarios import PAPER_SCENARIOS, random_scenario, run_suite
-from subtask_opt.planners.quadtree import compare_with_grid, decompose
+from subtask_opt.planners.agv.quadtree import compare_with_grid, decompose
+from subtask_opt.planners.agv.scenarios import PAPER_SCENARIOS, random_scenario, run_suite
+from subtask_opt.planners.agv.simulation import AgvParams, simulate
 
 
 def quadtree_vs_grid(seed: int, n_maps: int = 20) -> list[dict]:

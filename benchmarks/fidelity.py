@@ -5,7 +5,7 @@ the tour is optimised under each time model - ``paper``, ``trapezoid`` (the
 Cartesian models, one elbow branch), ``line`` and ``joint`` (joint-aware, the
 elbow configuration of each subtask chosen with the order) - and then executed
 as a trajectory that respects the joint limits
-(:func:`subtask_opt.trajectory.tour_trajectory`): the Cartesian models' straight
+(:func:`subtask_opt.arm.trajectory.tour_trajectory`): the Cartesian models' straight
 lines are driven as fast as the joint and Cartesian limits allow (a joint move
 where the line is impossible), the joint-aware models exactly as timed. Every
 trajectory is checked by the validator.
@@ -30,8 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt import SequencingProblem, builtin_case, load_arm, solve
-from subtask_opt.progress import progress_bar
-from subtask_opt.trajectory import tour_trajectory, validate_trajectory
+from subtask_opt.arm.trajectory import tour_trajectory, validate_trajectory
+from subtask_opt.base.progress import progress_bar
 
 ROBOTS = ("planar_2r", "asr_twodof")
 MODELS = ("paper", "trapezoid", "line", "joint")

@@ -39,8 +39,8 @@ def _timed(fn, repeats):
 
 
 def field_times(out):
-    from subtask_opt.planners.distance_transform import distance_field
-    from subtask_opt.planners.grid import GridWorld
+    from subtask_opt.planners.grid.distance_transform import distance_field
+    from subtask_opt.planners.grid.world import GridWorld
 
     print("\n== 512x512 distance field (after warm-up), median / best of 7 ==")
     for name in ("random512-10-0", "8room_000"):
@@ -54,8 +54,8 @@ def field_times(out):
 
 
 def mdt_figures(out):
-    from subtask_opt.planners import distance_transform as dt
-    from subtask_opt.planners.grid_maps import THESIS_MAPS, thesis_case
+    from subtask_opt.planners.grid import distance_transform as dt
+    from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
 
     print("\n== MDT on the six 14x9 maps: time per plan (field + path), length vs DT ==")
     for name in THESIS_MAPS:
@@ -71,9 +71,9 @@ def mdt_figures(out):
 
 
 def ga_figures(out, seeds):
-    from subtask_opt.planners import distance_transform as dt
-    from subtask_opt.planners import ga_path
-    from subtask_opt.planners.grid_maps import THESIS_MAPS, thesis_case
+    from subtask_opt.planners.grid import distance_transform as dt
+    from subtask_opt.planners.grid import ga_path
+    from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
 
     print(f"\n== GA over {seeds} seeds: successes / within 5% of MDT / worst ratio / mean time ==")
     c0 = thesis_case("open")
@@ -98,8 +98,8 @@ def ga_figures(out, seeds):
 
 
 def local_figures(out):
-    from subtask_opt.planners import vff, vfh
-    from subtask_opt.planners.grid_maps import MAP_NAMES, thesis_case
+    from subtask_opt.planners.grid import vff, vfh
+    from subtask_opt.planners.grid.maps import MAP_NAMES, thesis_case
 
     print("\n== VFF / VFH outcomes ==")
     for name in MAP_NAMES:
@@ -113,8 +113,8 @@ def local_figures(out):
 
 
 def movingai_figures(out):
-    from subtask_opt.planners.grid import GridWorld
-    from subtask_opt.planners.movingai import bench, read_scenarios
+    from subtask_opt.planners.grid.movingai import bench, read_scenarios
+    from subtask_opt.planners.grid.world import GridWorld
 
     print("\n== MovingAI: every row of every scenario file (octile DT vs optimum) ==")
     for scen_path in sorted((MOVINGAI / "scenarios").glob("*.scen")):
@@ -128,8 +128,8 @@ def movingai_figures(out):
 
 
 def table(out):
-    from subtask_opt.planners.grid_compare import compare, format_table
-    from subtask_opt.planners.grid_maps import THESIS_MAPS, thesis_case
+    from subtask_opt.planners.grid.compare import compare, format_table
+    from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
 
     print("\n== six-map comparison (thesis Tables 4.2-4.7), best of 5 after warm-up ==")
     rows = []

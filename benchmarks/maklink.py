@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt.planners import maklink, pso, visibility
-from subtask_opt.planners.maklink_table import SEED003_PAIRS, format_table, table_rows
-from subtask_opt.planners.world import PolygonWorld
+from subtask_opt.planners.polygon import maklink, pso, visibility
+from subtask_opt.planners.polygon.maklink_table import SEED003_PAIRS, format_table, table_rows
+from subtask_opt.planners.polygon.world import PolygonWorld
 
 
 def fresh(world: PolygonWorld) -> PolygonWorld:

@@ -17,9 +17,9 @@ import json
 import time
 from pathlib import Path
 
-from subtask_opt.planners.reactive_scenarios import PAPER_SCENARIOS, paper_scenario
-from subtask_opt.planners.reactive_sim import NAVIGATORS, benchmark, simulate
-from subtask_opt.planners.sonar import SonarRing
+from subtask_opt.planners.reactive.scenarios import PAPER_SCENARIOS, paper_scenario
+from subtask_opt.planners.reactive.simulation import NAVIGATORS, benchmark, simulate
+from subtask_opt.planners.reactive.sonar import SonarRing
 
 
 def paper_runs(sonar: SonarRing, seed: int, out: Path | None) -> list[dict]:

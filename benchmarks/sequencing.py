@@ -2,7 +2,7 @@
 
 Instances: square20 and random30 from 10 generator seeds (robot and time
 model selectable). Each instance's optimum is certified by an exact MILP with
-subtour cuts (HiGHS, :func:`subtask_opt.exact.milp_optimum`), not taken from
+subtour cuts (HiGHS, :func:`subtask_opt.arm.exact.milp_optimum`), not taken from
 our own runs. Both presets solve every instance from ``--seeds`` seeds; the
 peers OR-Tools (guided local search) and elkai (LKH-3) solve the same
 matrices in the same run when installed (``pip install -e '.[bench]'``).
@@ -33,8 +33,8 @@ from subtask_opt import (
     milp_optimum,
     solve,
 )
-from subtask_opt.exact import tour_length
-from subtask_opt.progress import progress_bar
+from subtask_opt.arm.exact import tour_length
+from subtask_opt.base.progress import progress_bar
 
 # generation at which the paper reports the optimum (its Figs. 10 and 13)
 PAPER_GENERATIONS = {"square20": 500, "random30": 800}

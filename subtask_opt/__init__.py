@@ -11,22 +11,23 @@ The sequencing API::
 Planners live in :mod:`subtask_opt.planners`; figures in :mod:`subtask_opt.plotting`.
 """
 
-from .arm import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
-from .configurations import best_configurations
-from .errors import (
+from subtask_opt import _kernel_cache  # noqa: F401  (first: selects numba's cache folder)
+from subtask_opt.arm.configurations import best_configurations
+from subtask_opt.arm.exact import held_karp, milp_optimum
+from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
+from subtask_opt.arm.sequencing import PRESETS, Result, SequencingProblem, SolverParams, solve
+from subtask_opt.arm.tasks import CASE_NAMES, SubtaskSet, builtin_case, load_subtasks, save_subtasks
+from subtask_opt.arm.timing.models import TIME_MODELS, LegCheck, TimingResult, travel_times
+from subtask_opt.arm.trajectory import TourTrajectory, tour_trajectory, validate_trajectory
+from subtask_opt.base.errors import (
     InputDataError,
     NoPathError,
     ParameterError,
     SubtaskOptError,
     UnreachableError,
 )
-from .exact import held_karp, milp_optimum
-from .result import History, PlanResult
-from .sequencing import PRESETS, Result, SequencingProblem, SolverParams, solve
-from .stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
-from .tasks import CASE_NAMES, SubtaskSet, builtin_case, load_subtasks, save_subtasks
-from .timing import TIME_MODELS, LegCheck, TimingResult, travel_times
-from .trajectory import TourTrajectory, tour_trajectory, validate_trajectory
+from subtask_opt.base.results import History, PlanResult
+from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
 
 __version__ = "0.1.0"
 

@@ -20,3 +20,11 @@ def movingai_dir() -> Path:
     if not path.is_dir():
         pytest.skip(f"shared benchmark data not found at {path}")
     return path
+
+
+@pytest.fixture(scope="module")
+def seed003():
+    """The MAKLINK paper's 350 x 350 world with its six obstacles (convex hulls)."""
+    from subtask_opt.planners.polygon.world import PolygonWorld
+
+    return PolygonWorld.builtin("seed003")

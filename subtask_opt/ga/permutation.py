@@ -11,18 +11,31 @@ permutation of 0..N-1. ``aux`` holds the operator parameters (see
   nearest neighbour rather than by a double-bridge kick of the best tour;
 * ``aux[AUX_MAX_SEGMENT]`` - longest run Or-opt moves;
 * ``aux[AUX_NEIGHBOURS]`` = K, followed by the N x K table of each city's K
-  nearest cities (row-major), used by the fast local search.
+  nearest cities (row-major), used by the fast local search;
+* ``aux[AUX_SEARCH]`` - how the operators search (a preset is a flag, not a
+  chromosome type): :data:`SEARCH_PAPER` (the paper's micro-GA: random
+  restarts, no local search), :data:`SEARCH_FAST` (kicked or GRASP restarts and
+  children polished by neighbour-list 2-opt/Or-opt around what changed; for
+  symmetric costs) or :data:`SEARCH_EXACT` (kicked restarts, full-sweep exact
+  2-opt/Or-opt; any costs).
+
+:func:`randomize`, :func:`crossover` and :func:`improve` are the operators the
+GA dispatch registers; they branch on ``aux[AUX_SEARCH]``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numba.np.random.random_methods import random_interval
 
 FALLBACK_RANDOM = 0.0
 FALLBACK_NEAREST = 1.0
-AUX_FALLBACK, AUX_GRASP, AUX_MAX_SEGMENT, AUX_NEIGHBOURS = range(4)
-_AUX_TABLE = 4
+SEARCH_PAPER = 0.0
+SEARCH_FAST = 1.0
+SEARCH_EXACT = 2.0
+AUX_FALLBACK, AUX_GRASP, AUX_MAX_SEGMENT, AUX_NEIGHBOURS, AUX_SEARCH = range(5)
+_AUX_TABLE = 5
 
 
 def neighbour_table(matrix: np.ndarray) -> np.ndarray:
@@ -33,12 +46,13 @@ def neighbour_table(matrix: np.ndarray) -> np.ndarray:
 
 
 def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.25,
-             max_segment: int = 3, neighbours: int = 8) -> np.ndarray:
+             max_segment: int = 3, neighbours: int = 8,
+             search: float = SEARCH_PAPER) -> np.ndarray:
     """Pack the operator parameters and the first ``neighbours`` columns of
     ``table`` (:func:`neighbour_table` of the matrix) into ``aux``."""
     k = max(1, min(neighbours, table.shape[1]))
     head = [FALLBACK_NEAREST if nearest_fallback else FALLBACK_RANDOM, grasp_share,
-            float(max_segment), float(k)]
+            float(max_segment), float(k), float(search)]
     return np.concatenate([np.array(head), table[:, :k].astype(float).ravel()])
 
 
@@ -56,9 +70,13 @@ def tour_cost(genes, length, data, aux):
 def random_tour(genes, data, aux, rng, best, best_len):
     """A uniformly random permutation (initial population and paper restarts)."""
     n = data.shape[0]
-    perm = rng.permutation(n)
+    # rng.permutation(n), written out: the same Fisher-Yates draws as NumPy's
+    # shuffle, without compiling numba's general n-d shuffle (seconds of JIT)
     for i in range(n):
-        genes[i] = perm[i]
+        genes[i] = i
+    for i in range(n - 1, 0, -1):
+        j = np.int64(random_interval(rng.bit_generator, i))
+        genes[i], genes[j] = genes[j], genes[i]
     return n
 
 
@@ -525,3 +543,29 @@ def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, ch
     return local_search_around(child, n, data, aux, active, m)
 
 
+@njit(cache=True, inline="always")
+def randomize(genes, data, aux, rng, best, best_len):
+    """A new tour for the initial population or a restart, as ``aux[AUX_SEARCH]`` says."""
+    search = aux[AUX_SEARCH]
+    if search == SEARCH_FAST:
+        return kicked_best_polished(genes, data, aux, rng, best, best_len)
+    if search == SEARCH_EXACT:
+        return kicked_best(genes, data, aux, rng, best, best_len)
+    return random_tour(genes, data, aux, rng, best, best_len)
+
+
+@njit(cache=True, inline="always")
+def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
+    """Greedy crossover; polished around the new edges when searching fast."""
+    if aux[AUX_SEARCH] == SEARCH_FAST:
+        return greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
+    return greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
+
+
+@njit(cache=True, inline="always")
+def improve(genes, length, data, aux):
+    """The exact full-sweep local search when searching exactly; else nothing
+    (the fast search polishes inside crossover and randomize)."""
+    if aux[AUX_SEARCH] == SEARCH_EXACT:
+        return exact_local_search(genes, length, data, aux)
+    return length

@@ -1,22 +1,13 @@
-"""Mobile-robot planners of the same research line, one module each.
+"""Mobile-robot planners of the same research line, one folder per family.
 
-Every planner module has ``plan(world, start, goal, *, params=..., seed=...) ->
-PlanResult`` (:class:`subtask_opt.result.PlanResult`); simulations return a
-run record. Worlds:
+* :mod:`.grid` - occupancy grids: distance transforms (3/4 chamfer, octile),
+  any-angle MDT, the GA path planner on the shared GA core, VFF, VFH.
+* :mod:`.polygon` - polygon worlds: MAKLINK + Dijkstra / improved Dijkstra, PSO,
+  the exact visibility graph.
+* :mod:`.reactive` - a unicycle with a sonar ring: fuzzy via-point selection,
+  sonar VFF and VFH.
+* :mod:`.agv` - an AGV among moving obstacles: certainty grid, 2-bit local map,
+  quadtree, t-second collision check.
 
-* :class:`GridWorld` (:mod:`.grid`) - occupancy grids from ASCII, arrays, PNG
-  images and MovingAI maps; planners :mod:`.distance_transform` (Jarvis 3/4
-  chamfer, exact octile, any-angle "modified" transform), :mod:`.ga_path`
-  (GA path planner on the shared GA core), :mod:`.vff`, :mod:`.vfh`,
-  :mod:`.quadtree`; the AGV simulation :mod:`.agv` with
-  :mod:`.certainty_grid` maps from images.
-* :class:`PolygonWorld` (:mod:`.world`) - polygon obstacles; planners
-  :mod:`.visibility` (exact shortest path), :mod:`.maklink` (MAKLINK graph +
-  Dijkstra / improved Dijkstra), :mod:`.pso`; the reactive navigation
-  simulation :mod:`.reactive_sim` (fuzzy via-point selection, VFF, VFH).
+:mod:`.base` holds the planner protocol, the registry and the shared outcomes.
 """
-
-from .grid import GridWorld
-from .world import PolygonWorld
-
-__all__ = ["GridWorld", "PolygonWorld"]

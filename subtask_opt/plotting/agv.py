@@ -11,8 +11,8 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from ..planners.agv import AgvRun
-    from ..planners.quadtree import Quadtree
+    from subtask_opt.planners.agv.quadtree import Quadtree
+    from subtask_opt.planners.agv.simulation import AgvRun
 
 _OBSTACLE_COLOURS = ("C3", "C1", "C4", "C5", "C6", "C8")
 _EVENT_MARKERS = {"brake": ("v", "C3"), "wait": ("s", "C3"), "speed_up": ("^", "C2"),
@@ -50,7 +50,7 @@ def plot_quadtree(tree: Quadtree, occupancy: np.ndarray, *, path: np.ndarray | N
     finest size) squares with their outlines, and an optional path."""
     from matplotlib.patches import Rectangle
 
-    from ..planners.quadtree import BLACK, GREY
+    from subtask_opt.planners.agv.quadtree import BLACK, GREY
 
     fig, ax = _axes(ax)
     draw_grid(ax, occupancy)
@@ -70,7 +70,7 @@ def plot_local_states(states: np.ndarray, *, ax: Axes | None = None) -> Figure:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from ..planners.certainty_grid import STATE_NAMES
+    from subtask_opt.planners.agv.certainty_grid import STATE_NAMES
 
     fig, ax = _axes(ax)
     colours = ["white", "#9ecae1", "#fd8d3c", "#252525"]
@@ -89,7 +89,7 @@ def plot_run(run: AgvRun, *, ax: Axes | None = None, corners: bool = True,
     fig, ax = _axes(ax)
     draw_grid(ax, run.world.occupancy, run.static_cells)
     if corners:
-        from ..planners.agv import near_points
+        from subtask_opt.planners.agv.simulation import near_points
 
         pts = near_points(run.world.occupancy)
         if len(pts):

@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from ..planners.maklink import MaklinkGraph
-    from ..planners.world import PolygonWorld
-    from ..result import PlanResult
+    from subtask_opt.base.results import PlanResult
+    from subtask_opt.planners.polygon.maklink import MaklinkGraph
+    from subtask_opt.planners.polygon.world import PolygonWorld
 
 _PATH_STYLES = {
     "dijkstra": dict(color="tab:orange", ls="--", lw=1.6),
@@ -30,7 +30,7 @@ def draw_world(ax: Any, world: PolygonWorld, *, label_obstacles: bool = True) ->
     """Bounds and filled obstacles (numbered when ``label_obstacles``)."""
     from matplotlib.patches import Polygon, Rectangle
 
-    from ..planners.world import interior_point
+    from subtask_opt.planners.polygon.world import interior_point
 
     x0, y0, x1, y1 = world.bounds
     ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, lw=1.2, color="black"))

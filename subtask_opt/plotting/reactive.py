@@ -11,8 +11,8 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from ..planners.reactive_sim import ReactiveRun
-    from ..planners.world import PolygonWorld
+    from subtask_opt.planners.polygon.world import PolygonWorld
+    from subtask_opt.planners.reactive.simulation import ReactiveRun
 
 
 def _axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
@@ -126,8 +126,8 @@ def animate_run(world: PolygonWorld, run: ReactiveRun, path: str | Path, *, fps:
     import matplotlib.pyplot as plt
     from matplotlib.animation import PillowWriter
 
-    from ..errors import ParameterError
-    from ..progress import progress_bar
+    from subtask_opt.base.errors import ParameterError
+    from subtask_opt.base.progress import progress_bar
 
     if isinstance(every, bool) or not isinstance(every, int) or every < 1:
         raise ParameterError(f"animate_run.every must be an integer >= 1, got {every!r}")

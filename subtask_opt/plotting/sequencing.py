@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from ..sequencing import Result, SequencingProblem
+    from subtask_opt.arm.sequencing import Result, SequencingProblem
 
 
 def plot_workspace(ax: Axes, arm) -> None:

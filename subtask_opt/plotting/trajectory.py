@@ -1,4 +1,4 @@
-"""Figures and animation of an executed tour (:class:`subtask_opt.trajectory.TourTrajectory`).
+"""Figures and animation of an executed tour (:class:`subtask_opt.arm.trajectory.TourTrajectory`).
 
 * :func:`plot_joint_profiles` - joint positions, velocities and accelerations
   against time, with the limits;
@@ -15,17 +15,17 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._timing_kernels import fk_batch
-from ..errors import InputDataError, require_int, require_positive
-from ..progress import progress_bar
-from .sequencing import plot_workspace
+from subtask_opt.arm._kinematics_kernels import fk_batch
+from subtask_opt.base.errors import InputDataError, require_int, require_positive
+from subtask_opt.base.progress import progress_bar
+from subtask_opt.plotting.sequencing import plot_workspace
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from ..sequencing import SequencingProblem
-    from ..trajectory import TourTrajectory
+    from subtask_opt.arm.sequencing import SequencingProblem
+    from subtask_opt.arm.trajectory import TourTrajectory
 
 
 def plot_joint_profiles(trajectory: TourTrajectory, *, dt: float = 0.005,

@@ -1,0 +1,97 @@
+"""Where numba keeps the package's compiled kernels, and when that copy is stale.
+
+numba keys its on-disk cache on the file that defines a function only: edit a
+kernel that others call and the callers keep running the old code. So the
+cache lives in a folder named after a hash of every kernel source file of the
+package: any edit to any of them selects a fresh folder, and stale folders are
+removed. Import this module before any module that defines a kernel (the
+package's ``__init__`` does).
+
+The root folder is ``$SUBTASK_OPT_CACHE_DIR`` or, by default,
+``~/.cache/subtask_opt`` (``$XDG_CACHE_HOME`` is honoured); ``make clean`` and
+``python -m subtask_opt._kernel_cache --clear`` remove it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import numba
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+_PREFIX = "kernels-"
+
+
+def cache_root() -> Path:
+    """The folder that holds every kernel-cache generation."""
+    explicit = os.environ.get("SUBTASK_OPT_CACHE_DIR")
+    if explicit:
+        return Path(explicit).expanduser()
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "subtask_opt"
+
+
+def kernel_sources() -> list[Path]:
+    """Every source file of the package that defines a numba kernel, sorted."""
+    return sorted(p for p in PACKAGE_DIR.rglob("*.py")
+                  if "__pycache__" not in p.parts and b"@njit" in p.read_bytes())
+
+
+def source_hash() -> str:
+    """A short hash of the kernel sources (paths relative to the package, and contents)."""
+    digest = hashlib.sha256(numba.__version__.encode())
+    for path in kernel_sources():
+        digest.update(str(path.relative_to(PACKAGE_DIR)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def cache_dir() -> Path:
+    """This source tree's cache folder."""
+    return cache_root() / f"{_PREFIX}{source_hash()}"
+
+
+def is_warm(group: str) -> bool:
+    """Whether the kernels of ``group`` (e.g. ``"sequencing"``) were compiled for these sources."""
+    return (CACHE_DIR / f"{group}.warm").exists()
+
+
+def mark_warm(group: str) -> None:
+    """Record that ``group``'s kernels are now in the cache."""
+    try:
+        (CACHE_DIR / f"{group}.warm").touch()
+    except OSError:  # a read-only cache only costs recompilation
+        pass
+
+
+def clear() -> Path:
+    """Remove every cached generation; return the folder that was cleared."""
+    root = cache_root()
+    shutil.rmtree(root, ignore_errors=True)
+    return root
+
+
+def _activate() -> Path:
+    folder = cache_dir()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for old in folder.parent.glob(f"{_PREFIX}*"):
+            if old != folder:
+                shutil.rmtree(old, ignore_errors=True)
+    except OSError:  # unwritable: numba falls back to compiling in memory
+        pass
+    numba.config.CACHE_DIR = str(folder)
+    return folder
+
+
+CACHE_DIR = _activate()
+
+if __name__ == "__main__":  # pragma: no cover - make clean
+    if sys.argv[1:] == ["--clear"]:
+        print(f"removed {clear()}")
+    else:
+        print(CACHE_DIR)

@@ -1,0 +1,294 @@
+"""Subtask sets: N planar subtask positions (and optional tool angles).
+
+A :class:`SubtaskSet` holds the points in metres in the robot model's world
+frame. Files: CSV with a header ``x,y`` or ``x,y,theta``, or JSON
+``{"points": [[x, y], ...], "theta": [...], "name": "..."}`` (``theta`` and
+``name`` optional). Built-in cases, placed inside a given arm's reachable
+workspace: ``square20`` (a 5 x 4 lattice, several optimal tours) and
+``random30`` (30 uniformly random reachable points, seeded).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from subtask_opt.arm.model import Arm
+from subtask_opt.base.errors import InputDataError, ParameterError, require_int, require_positive
+
+CASE_NAMES: tuple[str, ...] = ("square20", "random30")
+
+# Two subtasks equal to this resolution (m) count as duplicates.
+_DUPLICATE_TOL = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class SubtaskSet:
+    """N planar subtasks.
+
+    Attributes:
+        points: (N, 2) float64 positions (m) in the robot's world frame; N >= 3,
+            finite, no two equal.
+        theta: optional (N,) tool angles (rad). The 2-DOF arm cannot choose its
+            tool angle (it follows from the position and elbow branch); when
+            given, the Cartesian time models use these angles for the rotation
+            instead of the arm's.
+        name: a label (file stem or case name).
+    """
+
+    points: np.ndarray
+    theta: np.ndarray | None = None
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        try:
+            pts = np.array(self.points, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputDataError(
+                f"SubtaskSet.points must be numbers of shape (N, 2), got {self.points!r}"
+            ) from None
+        if pts.ndim != 2 or pts.shape[1] != 2:
+            raise InputDataError(f"SubtaskSet.points must have shape (N, 2), got {pts.shape}")
+        if pts.shape[0] < 3:
+            raise InputDataError(
+                f"SubtaskSet.points needs at least 3 subtasks, got {pts.shape[0]}")
+        bad = np.flatnonzero(~np.isfinite(pts).all(axis=1))
+        if bad.size:
+            raise InputDataError(f"subtask {bad[0]} is not finite: {pts[bad[0]].tolist()}")
+        # Duplicates: equal once rounded to the nanometre; sorting keeps this O(N log N).
+        key = np.round(pts / _DUPLICATE_TOL)
+        order = np.lexsort((key[:, 1], key[:, 0]))
+        same = np.flatnonzero((key[order[1:]] == key[order[:-1]]).all(axis=1))
+        if same.size:
+            i, j = sorted((int(order[same[0]]), int(order[same[0] + 1])))
+            raise InputDataError(
+                f"subtasks {i} and {j} are duplicates: both at {pts[i].tolist()}")
+        pts.setflags(write=False)
+        object.__setattr__(self, "points", pts)
+        if self.theta is not None:
+            try:
+                th = np.array(self.theta, dtype=np.float64)
+            except (TypeError, ValueError):
+                raise InputDataError(
+                    f"SubtaskSet.theta must be {pts.shape[0]} numbers, got {self.theta!r}"
+                ) from None
+            if th.shape != (pts.shape[0],):
+                raise InputDataError(
+                    f"SubtaskSet.theta must have {pts.shape[0]} values (one per subtask), "
+                    f"got shape {th.shape}")
+            bad = np.flatnonzero(~np.isfinite(th))
+            if bad.size:
+                raise InputDataError(f"theta of subtask {bad[0]} is not finite: {th[bad[0]]}")
+            th.setflags(write=False)
+            object.__setattr__(self, "theta", th)
+        if not isinstance(self.name, str):
+            raise ParameterError(f"SubtaskSet.name must be a string, got {self.name!r}")
+
+    def __len__(self) -> int:
+        return int(self.points.shape[0])
+
+    def __repr__(self) -> str:
+        theta = "" if self.theta is None else ", with theta"
+        return f"SubtaskSet({self.name!r}, {len(self)} subtasks{theta})"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready form (the format :func:`load_subtasks` reads)."""
+        out: dict[str, Any] = {"name": self.name, "points": self.points.tolist()}
+        if self.theta is not None:
+            out["theta"] = self.theta.tolist()
+        return out
+
+
+def _number(text: str, path: Path, line: int, column: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise InputDataError(
+            f"{path}, line {line}: {column} is not a number: {text.strip()!r}") from None
+
+
+def _load_csv(path: Path, text: str) -> SubtaskSet:
+    rows = [(n, row) for n, row in enumerate(csv.reader(text.splitlines()), start=1)
+            if row and any(cell.strip() for cell in row)]
+    if not rows:
+        raise InputDataError(f"{path} is empty: expected a header x,y[,theta] and rows")
+    line, header = rows[0]
+    header = [h.strip().lower() for h in header]
+    if header not in (["x", "y"], ["x", "y", "theta"]):
+        raise InputDataError(
+            f"{path}, line {line}: header must be x,y or x,y,theta, got {','.join(header)}")
+    points, theta = [], []
+    for line, row in rows[1:]:
+        if len(row) != len(header):
+            raise InputDataError(
+                f"{path}, line {line}: expected {len(header)} values "
+                f"({','.join(header)}), got {len(row)}")
+        values = [_number(cell, path, line, col) for cell, col in zip(row, header, strict=True)]
+        if not all(math.isfinite(v) for v in values):
+            raise InputDataError(f"{path}, line {line}: values must be finite, got {values}")
+        points.append(values[:2])
+        if len(values) == 3:
+            theta.append(values[2])
+    return _build(points, theta if len(header) == 3 else None, path.stem, path)
+
+
+def _load_json(path: Path, text: str) -> SubtaskSet:
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputDataError(f"{path}, line {exc.lineno}: invalid JSON ({exc.msg})") from None
+    if not isinstance(data, dict) or "points" not in data:
+        raise InputDataError(f'{path}: expected an object {{"points": [[x, y], ...]}}')
+    points = data["points"]
+    if not isinstance(points, list) or not all(
+            isinstance(p, list) and len(p) == 2
+            and all(isinstance(v, int | float) and not isinstance(v, bool) for v in p)
+            for p in points):
+        raise InputDataError(f'{path}: "points" must be a list of [x, y] number pairs')
+    theta = data.get("theta")
+    if theta is not None and (not isinstance(theta, list) or not all(
+            isinstance(v, int | float) and not isinstance(v, bool) for v in theta)):
+        raise InputDataError(f'{path}: "theta" must be a list of numbers')
+    name = data.get("name") or path.stem
+    if not isinstance(name, str):
+        raise InputDataError(f'{path}: "name" must be a string, got {name!r}')
+    return _build(points, theta, name, path)
+
+
+def _build(points: Any, theta: Any, name: str, path: Path) -> SubtaskSet:
+    try:
+        return SubtaskSet(np.array(points, dtype=np.float64).reshape(-1, 2),
+                          None if theta is None else np.array(theta, dtype=np.float64), name)
+    except InputDataError as exc:
+        raise InputDataError(f"{path}: {exc}") from None
+
+
+def load_subtasks(path: str | Path) -> SubtaskSet:
+    """Read a subtask set from ``.csv`` (header ``x,y[,theta]``) or ``.json``.
+
+    Raises:
+        InputDataError: missing file, unknown extension, or malformed content
+            (the message names the line).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".csv", ".json"):
+        raise InputDataError(f"subtask file must end in .csv or .json, got {path.name!r}")
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise InputDataError(f"subtask file not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputDataError(f"cannot read subtask file {path}: {exc}") from None
+    return _load_csv(path, text) if suffix == ".csv" else _load_json(path, text)
+
+
+def save_subtasks(subtasks: SubtaskSet, path: str | Path) -> None:
+    """Write a subtask set as ``.csv`` or ``.json`` (by the extension), full precision."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".json":
+        path.write_text(json.dumps(subtasks.to_dict(), indent=1) + "\n")
+    elif suffix == ".csv":
+        with path.open("w", newline="") as fh:
+            writer = csv.writer(fh)
+            if subtasks.theta is None:
+                writer.writerow(["x", "y"])
+                writer.writerows([repr(float(x)), repr(float(y))] for x, y in subtasks.points)
+            else:
+                writer.writerow(["x", "y", "theta"])
+                writer.writerows([repr(float(x)), repr(float(y)), repr(float(t))]
+                                 for (x, y), t in zip(subtasks.points, subtasks.theta,
+                                                      strict=True))
+    else:
+        raise InputDataError(f"subtask file must end in .csv or .json, got {path.name!r}")
+
+
+def _reachable_both(arm: Arm, pts: np.ndarray) -> tuple[bool, bool]:
+    q = arm.ik(pts)
+    ok = np.isfinite(q).all(axis=2)  # (M, 2 branches)
+    return bool(ok.all()), bool(ok.any(axis=1).all())
+
+
+def _square20(arm: Arm) -> SubtaskSet:
+    """The largest 5 x 4 lattice in front of the arm (along its q = 0 direction).
+
+    Scans spacings from large to small and distances from the base; keeps the
+    lattice's hull clear of the inner disc and its points within 90% of the
+    reach; takes the first lattice reachable in both elbow branches, else the
+    first reachable in at least one.
+    """
+    a1 = arm.angle_offsets[0]
+    u = np.array([math.cos(a1), math.sin(a1)])
+    v = np.array([-u[1], u[0]])
+    ix, iy = np.meshgrid(np.arange(5.0), np.arange(4.0))
+    grid = np.column_stack([ix.ravel() - 2.0, iy.ravel() - 1.5])  # centred, rows of 5
+    fallback = None
+    for h in arm.r_max * np.linspace(0.2, 0.02, 91):
+        for c in np.linspace(arm.r_min, arm.r_max, 101):
+            pts = arm.base_xy + (c * u)[None, :] + h * (grid[:, :1] * u + grid[:, 1:] * v)
+            if c - 2.0 * h <= arm.r_min:
+                continue  # the lattice's hull must miss the inner disc: no leg crosses it
+            if np.hypot(*(pts - arm.base_xy).T).max() > 0.9 * arm.r_max:
+                continue  # and stay off the rim, where the arm is singular
+            both, one = _reachable_both(arm, pts)
+            if both:
+                return SubtaskSet(pts, name="square20")
+            if one and fallback is None:
+                fallback = pts
+    if fallback is None:
+        raise ParameterError(f"no 5x4 lattice fits in the workspace of robot {arm.name!r}")
+    return SubtaskSet(fallback, name="square20")
+
+
+def random_subtasks(arm: Arm, n: int, *, seed: int = 0, min_spacing: float | None = None,
+                    name: str = "") -> SubtaskSet:
+    """n uniformly random points of the arm's reachable workspace, seeded.
+
+    Rejection sampling in the bounding box of the annulus: a point is kept if
+    some elbow branch reaches it within the joint limits and it lies at least
+    ``min_spacing`` (default 3% of the reach) from the points already kept.
+    """
+    require_int("random_subtasks", "n", n, 3)
+    if min_spacing is None:
+        min_spacing = 0.03 * arm.r_max
+    require_positive("random_subtasks", "min_spacing", min_spacing)
+    rng = np.random.default_rng(seed)
+    pts = np.empty((n, 2))
+    count = 0
+    for _ in range(200):  # batches of candidates; a bounded search, never an endless loop
+        cand = arm.base_xy + rng.uniform(-arm.r_max, arm.r_max, size=(64 * n, 2))
+        cand = cand[np.isfinite(arm.ik(cand)).all(axis=2).any(axis=1)]
+        for p in cand:
+            if count and np.hypot(*(pts[:count] - p).T).min() < min_spacing:
+                continue
+            pts[count] = p
+            count += 1
+            if count == n:
+                return SubtaskSet(pts, name=name or f"random{n}")
+    raise ParameterError(
+        f"cannot place {n} subtasks {min_spacing:.4g} m apart in the workspace of "
+        f"{arm.name!r}: lower min_spacing or n")
+
+
+def builtin_case(name: str, arm: Arm, *, seed: int = 0) -> SubtaskSet:
+    """A built-in subtask set inside ``arm``'s workspace: ``square20`` or ``random30``.
+
+    ``square20`` is deterministic (``seed`` is ignored); ``random30`` draws 30
+    points with :func:`random_subtasks` from ``seed``.
+    """
+    if name == "square20":
+        return _square20(arm)
+    if name == "random30":
+        return random_subtasks(arm, 30, seed=seed, name="random30")
+    raise ParameterError(f"unknown case {name!r}: expected one of {', '.join(CASE_NAMES)}")
+
+
+__all__ = ["CASE_NAMES", "SubtaskSet", "builtin_case", "load_subtasks", "random_subtasks",
+           "save_subtasks"]

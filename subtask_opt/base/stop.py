@@ -1,0 +1,147 @@
+"""Stopping criteria for the GA core and the other iterative optimisers.
+
+Each criterion is a small callable ``criterion(progress) -> bool``; a run stops
+as soon as any of its criteria says so (PyVRP's ``pyvrp.stop`` style). Because a
+numba kernel cannot call Python objects, the driver runs the kernel in chunks:
+:meth:`generations_left` tells the driver how far it may run before asking
+again, so generation-based criteria stop at exactly the same generation
+whatever the chunking, and a seeded run is reproducible.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+from subtask_opt.base.errors import ParameterError, require_int, require_positive
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What a stopping criterion may look at between chunks of generations."""
+
+    generation: int
+    best_cost: float
+    generations_without_improvement: int
+    runtime_s: float
+
+
+@runtime_checkable
+class StoppingCriterion(Protocol):
+    def __call__(self, progress: Progress) -> bool: ...
+
+    def generations_left(self, progress: Progress) -> int | None:
+        """Generations that may run before this criterion must be asked again.
+
+        ``None`` means the criterion does not bound the chunk (time-based ones).
+        """
+        ...
+
+
+@dataclass(frozen=True)
+class MaxGenerations:
+    """Stop after ``generations`` generations in total."""
+
+    generations: int
+
+    def __post_init__(self) -> None:
+        require_int("MaxGenerations", "generations", self.generations, 1)
+
+    def __call__(self, progress: Progress) -> bool:
+        return progress.generation >= self.generations
+
+    def generations_left(self, progress: Progress) -> int | None:
+        return max(self.generations - progress.generation, 0)
+
+
+@dataclass(frozen=True)
+class MaxRuntime:
+    """Stop once ``seconds`` of wall time have passed (checked between chunks)."""
+
+    seconds: float
+
+    def __post_init__(self) -> None:
+        require_positive("MaxRuntime", "seconds", self.seconds)
+
+    def __call__(self, progress: Progress) -> bool:
+        return progress.runtime_s >= self.seconds
+
+    def generations_left(self, progress: Progress) -> int | None:
+        return None
+
+
+@dataclass(frozen=True)
+class NoImprovement:
+    """Stop after ``generations`` consecutive generations without a better best."""
+
+    generations: int
+
+    def __post_init__(self) -> None:
+        require_int("NoImprovement", "generations", self.generations, 1)
+
+    def __call__(self, progress: Progress) -> bool:
+        return progress.generations_without_improvement >= self.generations
+
+    def generations_left(self, progress: Progress) -> int | None:
+        return max(self.generations - progress.generations_without_improvement, 0)
+
+
+@dataclass(frozen=True)
+class TargetCost:
+    """Stop as soon as the best cost is at most ``cost`` (plus a relative ``tolerance``)."""
+
+    cost: float
+    tolerance: float = 1e-9
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.cost):
+            raise ParameterError(f"TargetCost.cost must be finite, got {self.cost!r}")
+        if not math.isfinite(self.tolerance) or self.tolerance < 0:
+            raise ParameterError(f"TargetCost.tolerance must be >= 0, got {self.tolerance!r}")
+
+    @property
+    def threshold(self) -> float:
+        return self.cost + self.tolerance * abs(self.cost)
+
+    def __call__(self, progress: Progress) -> bool:
+        return progress.best_cost <= self.threshold
+
+    def generations_left(self, progress: Progress) -> int | None:
+        return None
+
+
+def as_criteria(stop: StoppingCriterion | list[StoppingCriterion] | tuple | None,
+                default: list[StoppingCriterion]) -> list[StoppingCriterion]:
+    """Normalise ``stop`` (one criterion, a sequence, or None) to a non-empty list."""
+    if stop is None:
+        return list(default)
+    criteria = list(stop) if isinstance(stop, (list, tuple)) else [stop]
+    if not criteria:
+        raise ParameterError("stop must hold at least one stopping criterion, got []")
+    for c in criteria:  # duck-typed: isinstance on a runtime Protocol is slow
+        if not (callable(c) and callable(getattr(c, "generations_left", None))):
+            raise ParameterError(f"stop: {c!r} is not a stopping criterion")
+    if not any(c.generations_left(Progress(0, math.inf, 0, 0.0)) is not None
+               or isinstance(c, MaxRuntime) for c in criteria):
+        raise ParameterError(
+            "stop: a TargetCost alone may never be met; add MaxGenerations, "
+            "NoImprovement or MaxRuntime")
+    return criteria
+
+
+def target_threshold(criteria: list[StoppingCriterion]) -> float:
+    """The lowest TargetCost threshold among ``criteria`` (``-inf`` when none)."""
+    thresholds = [c.threshold for c in criteria if isinstance(c, TargetCost)]
+    return min(thresholds) if thresholds else -math.inf
+
+
+def kernel_limits(criteria: list[StoppingCriterion]) -> tuple[int, float]:
+    """``(stall_limit, target)`` for a kernel that enforces them itself.
+
+    The stall limit is the smallest NoImprovement (a huge number when none),
+    the target the lowest TargetCost threshold (``-inf`` when none).
+    """
+    stall = min((c.generations for c in criteria if isinstance(c, NoImprovement)),
+                default=2**62)
+    return stall, target_threshold(criteria)

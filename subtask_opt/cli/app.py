@@ -1,0 +1,68 @@
+"""Command-line interface: ``subtask-opt solve | plan ... | bench ...``.
+
+Each command family lives in :mod:`subtask_opt.commands` and registers its
+argparse sub-parsers; heavy imports (numba, Pinocchio) happen only inside the
+handlers, so ``--help`` is instant. A user mistake prints one line and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from subtask_opt.base.errors import SubtaskOptError
+
+EXIT_OK = 0
+EXIT_BAD_INPUT = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage mistake as one line and exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from subtask_opt.cli import agv, grid, polygon, reactive, solve
+
+    parser = _Parser(
+        prog="subtask-opt",
+        description="Minimum-time subtask sequencing for a planar arm, and mobile-robot planners.",
+    )
+    root = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    root.required = True
+    plan = root.add_parser("plan", help="plan a mobile-robot path").add_subparsers(
+        dest="world", metavar="WORLD", parser_class=_Parser)
+    plan.required = True
+    bench = root.add_parser("bench", help="run a benchmark and print its table").add_subparsers(
+        dest="suite", metavar="SUITE", parser_class=_Parser)
+    bench.required = True
+    solve.register(root)
+    for family in (grid, polygon, reactive, agv):
+        family.register(plan, bench)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the CLI; return the process exit code (0 ok, 2 bad input)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a usage mistake (2, already printed)
+        return int(exc.code or 0)
+    try:
+        return int(args.handler(args) or EXIT_OK)
+    except SubtaskOptError as exc:
+        print(f"subtask-opt: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # unreadable input, unwritable output
+        name = getattr(exc, "filename", None)
+        what = f"{exc.strerror or exc}: {name}" if name else str(exc)
+        print(f"subtask-opt: error: {what}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,85 @@
+"""How the GA loop breeds: :class:`GAConfig`, the one validator of GA parameters."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from subtask_opt.base.errors import (
+    ParameterError,
+    require_in_range,
+    require_int,
+    require_non_negative,
+)
+
+
+class LoopParams(NamedTuple):
+    """:class:`GAConfig` as the loop kernel reads it (numba caches NamedTuple arguments)."""
+
+    elite: int
+    crossover_rate: float
+    mutation_rate: float
+    restart_on_convergence: bool
+    convergence_tol: float
+    tournament: int
+    mutation_horizon: float
+
+
+@dataclass(frozen=True)
+class GAConfig:
+    """How the loop breeds.
+
+    Attributes:
+        population: number of individuals (5 for the micro-GA).
+        elite: how many of the best pass unchanged to the next generation.
+        crossover_rate: probability that a child comes from crossover rather
+            than as a copy of its first parent.
+        mutation_rate: probability that a child is mutated.
+        restart_on_convergence: re-seed (best + fresh individuals) once the
+            population has converged.
+        convergence_tol: the population has converged when
+            ``max(cost) - min(cost) <= convergence_tol * |min(cost)|``, or when
+            its sorted costs are the same as in the previous generation.
+        tournament: 0 picks each parent pair uniformly at random among
+            distinct individuals; k >= 2 picks each parent by a k-tournament.
+        mutation_horizon: generations over which non-uniform mutation shrinks
+            (its ``strength`` argument is generation / horizon, capped at 1).
+    """
+
+    population: int = 5
+    elite: int = 1
+    crossover_rate: float = 1.0
+    mutation_rate: float = 0.0
+    restart_on_convergence: bool = True
+    convergence_tol: float = 0.01
+    tournament: int = 0
+    mutation_horizon: int = 100
+
+    def __post_init__(self) -> None:
+        self.validate(type(self).__name__)
+
+    def validate(self, owner: str) -> None:
+        """Check every field; ``owner`` names the parameter class in messages
+        (planner parameter classes that embed these fields validate through here)."""
+        require_int(owner, "population", self.population, 2, 100_000)
+        require_int(owner, "elite", self.elite, 0)
+        if self.elite >= self.population:
+            raise ParameterError(
+                f"{owner}.elite must be < population ({self.population}), got {self.elite!r}")
+        require_in_range(owner, "crossover_rate", self.crossover_rate, 0.0, 1.0)
+        require_in_range(owner, "mutation_rate", self.mutation_rate, 0.0, 1.0)
+        require_non_negative(owner, "convergence_tol", self.convergence_tol)
+        if not isinstance(self.restart_on_convergence, bool):
+            raise ParameterError(f"{owner}.restart_on_convergence must be True or False, "
+                                 f"got {self.restart_on_convergence!r}")
+        require_int(owner, "tournament", self.tournament, 0)
+        if self.tournament == 1 or self.tournament > self.population:
+            raise ParameterError(
+                f"{owner}.tournament must be 0 or in [2, population], got {self.tournament!r}")
+        require_int(owner, "mutation_horizon", self.mutation_horizon, 1, 2**62)
+
+    def loop_params(self) -> LoopParams:
+        """The kernel's view of this configuration."""
+        return LoopParams(int(self.elite), float(self.crossover_rate), float(self.mutation_rate),
+                          bool(self.restart_on_convergence), float(self.convergence_tol),
+                          int(self.tournament), float(self.mutation_horizon))

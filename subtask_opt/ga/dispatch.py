@@ -1,0 +1,159 @@
+"""The one composition root of the GA: chromosome kind -> its five operators.
+
+numba cannot cache a function that takes other numba functions as arguments
+across processes, so the loop (:func:`subtask_opt.ga.loop.evolve`) takes an
+kind *tag* instead (:func:`subtask_opt.ga.kinds.tag`), whose numba type
+differs per kind. The five functions below are resolved per kind *while numba compiles*
+(``numba.extending.overload``): the loop compiled for one kind contains that
+kind's operators only, so a run compiles just what it needs, and a kind that
+was never registered is a clear typing error rather than a silent fallback.
+
+Operator signatures (``data``, ``aux`` belong to the operators):
+
+``randomize(genes_out, data, aux, rng, best, best_len) -> length``
+    A new individual for the initial population (``best_len == 0``) and for a
+    restart (``best`` holds the best so far, which a restart may perturb).
+``evaluate(genes, length, data, aux) -> cost``
+    Cost to minimise (``inf`` for an infeasible individual).
+``crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child) -> length``
+    Writes one child into ``child``.
+``mutate(genes, length, data, aux, rng, strength) -> length``
+    In place; ``strength`` = generation / horizon, in [0, 1].
+``improve(genes, length, data, aux) -> length``
+    In-place local search (the identity for a plain GA).
+
+The permutation kind is registered here; the other kinds register themselves
+from their domain (the configured permutation from :mod:`subtask_opt.arm`, the
+waypoint path from :mod:`subtask_opt.planners.grid`) with :func:`register`,
+so nothing under :mod:`subtask_opt.ga` imports a robot or a map.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+from numba.core.errors import TypingError
+from numba.extending import overload
+
+from subtask_opt.base.errors import ParameterError
+from subtask_opt.ga import permutation
+from subtask_opt.ga.kinds import TAGS, Kind
+
+OPERATOR_NAMES = ("randomize", "evaluate", "crossover", "mutate", "improve")
+
+
+class OperatorSet(NamedTuple):
+    """The five numba operators of one chromosome type."""
+
+    randomize: Any
+    evaluate: Any
+    crossover: Any
+    mutate: Any
+    improve: Any
+
+
+_REGISTRY: dict[int, OperatorSet] = {}
+
+
+def register(kind: Kind, operators: OperatorSet) -> None:
+    """Make ``operators`` the chromosome type ``kind`` (call at import of the defining module)."""
+    if not isinstance(kind, Kind):
+        raise ParameterError(f"register: kind must be a Kind, got {kind!r}")
+    missing = [n for n in OPERATOR_NAMES if not callable(getattr(operators, n, None))]
+    if missing:
+        raise ParameterError(f"register: {kind.name} lacks the operators {missing}")
+    _REGISTRY[int(kind)] = operators
+
+
+def registered(kind: Kind) -> OperatorSet | None:
+    """The operators registered for ``kind``, or None."""
+    return _REGISTRY.get(int(kind))
+
+
+_KIND_OF_TAG = {cls: kind for kind, cls in TAGS.items()}
+
+
+def _operator(kind: Any, name: str) -> Any:
+    cls = getattr(kind, "instance_class", None)
+    if cls not in _KIND_OF_TAG:
+        raise TypingError(f"GA dispatch: expected a kind tag (subtask_opt.ga.kinds.tag), "
+                          f"got {kind}")
+    ops = _REGISTRY.get(int(_KIND_OF_TAG[cls]))
+    if ops is None:
+        raise TypingError(f"GA dispatch: no operators registered for {_KIND_OF_TAG[cls]!r}")
+    return getattr(ops, name)
+
+
+def randomize(kind, genes, data, aux, rng, best, best_len):  # type: ignore[no-untyped-def]
+    """Dispatch to the kind's randomize (numba only)."""
+    raise NotImplementedError("call from a numba kernel")
+
+
+def evaluate(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
+    """Dispatch to the kind's evaluate (numba only)."""
+    raise NotImplementedError("call from a numba kernel")
+
+
+def crossover(kind, genes_a, len_a, genes_b, len_b, data, aux, rng, child):  # type: ignore[no-untyped-def]
+    """Dispatch to the kind's crossover (numba only)."""
+    raise NotImplementedError("call from a numba kernel")
+
+
+def mutate(kind, genes, length, data, aux, rng, strength):  # type: ignore[no-untyped-def]
+    """Dispatch to the kind's mutate (numba only)."""
+    raise NotImplementedError("call from a numba kernel")
+
+
+def improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
+    """Dispatch to the kind's improve (numba only)."""
+    raise NotImplementedError("call from a numba kernel")
+
+
+@overload(randomize, inline="always")
+def _randomize(kind, genes, data, aux, rng, best, best_len):  # type: ignore[no-untyped-def]
+    op = _operator(kind, "randomize")
+
+    def impl(kind, genes, data, aux, rng, best, best_len):  # type: ignore[no-untyped-def]
+        return op(genes, data, aux, rng, best, best_len)
+    return impl
+
+
+@overload(evaluate, inline="always")
+def _evaluate(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
+    op = _operator(kind, "evaluate")
+
+    def impl(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
+        return op(genes, length, data, aux)
+    return impl
+
+
+@overload(crossover, inline="always")
+def _crossover(kind, genes_a, len_a, genes_b, len_b, data, aux, rng, child):  # type: ignore[no-untyped-def]
+    op = _operator(kind, "crossover")
+
+    def impl(kind, genes_a, len_a, genes_b, len_b, data, aux, rng, child):  # type: ignore[no-untyped-def]
+        return op(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
+    return impl
+
+
+@overload(mutate, inline="always")
+def _mutate(kind, genes, length, data, aux, rng, strength):  # type: ignore[no-untyped-def]
+    op = _operator(kind, "mutate")
+
+    def impl(kind, genes, length, data, aux, rng, strength):  # type: ignore[no-untyped-def]
+        return op(genes, length, data, aux, rng, strength)
+    return impl
+
+
+@overload(improve, inline="always")
+def _improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
+    op = _operator(kind, "improve")
+
+    def impl(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
+        return op(genes, length, data, aux)
+    return impl
+
+
+register(Kind.PERMUTATION, OperatorSet(
+    permutation.randomize, permutation.tour_cost, permutation.crossover,
+    permutation.no_mutation, permutation.improve))

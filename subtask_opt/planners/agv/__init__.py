@@ -1,0 +1,1 @@
+"""An AGV among moving obstacles: certainty grid, 2-bit local map, quadtree, t-second check."""

@@ -1,0 +1,1 @@
+"""Reactive navigation with a sonar ring: fuzzy via-point selection, VFF, VFH."""

@@ -1,0 +1,167 @@
+"""Continuous VFF and VFH navigators on the same robot and sonar ring as the fuzzy one.
+
+Both are classic Borenstein-Koren reactive methods, rebuilt for a ring of range
+sensors instead of a certainty grid, so that the comparison with
+:class:`.fuzzy_nav.FuzzyNavigator` isolates the decision rule:
+
+* :class:`VFFNavigator` (virtual force field): each echo pushes the robot away
+  along its beam with a force growing as the echo nears, the goal pulls with a
+  constant force; the robot steers toward the resultant.
+* :class:`VFHNavigator` (vector field histogram, VFH+ style): a binary polar
+  histogram over the beam directions, each echo closer than
+  ``threshold_distance`` blocking the directions within the angle its
+  body-enlarged width subtends; the robot steers to the free direction nearest
+  the goal, turning in place when the goal is behind or nothing is free.
+
+Both share one speed law: full speed when aligned and clear, slowing with the
+heading error and to zero when an echo lies in the swept corridor closer than
+``radius + safety_margin``. Neither escapes local minima.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from subtask_opt.base.errors import require_non_negative, require_positive
+from subtask_opt.planners.reactive.fuzzy import NavDecision
+from subtask_opt.planners.reactive.sonar import SonarRing
+from subtask_opt.planners.reactive.unicycle import Unicycle, wrap_angle
+
+
+def _command(robot: Unicycle, sonar: SonarRing, ranges: np.ndarray, heading_error: float,
+             safety_margin: float, slow_distance: float) -> tuple[float, float]:
+    """Turn toward ``heading_error`` (reaching it in one step if the limit allows) and
+    pick a speed that stops before an echo in the swept corridor."""
+    omega = min(max(heading_error / robot.dt, -robot.max_turn_rate), robot.max_turn_rate)
+    a = sonar.angles
+    ahead = ranges * np.cos(a)
+    lateral = np.abs(ranges * np.sin(a))
+    in_path = (ranges < sonar.max_range) & (ahead > 0) & (lateral < robot.radius + safety_margin)
+    free = float(np.min(ahead[in_path])) if np.any(in_path) else sonar.max_range
+    room = (free - robot.radius - safety_margin) / slow_distance
+    v = robot.max_speed * max(0.0, math.cos(heading_error)) * min(max(room, 0.0), 1.0)
+    return v, omega
+
+
+@dataclass(frozen=True)
+class VFFParams:
+    """Virtual force field gains.
+
+    Attributes:
+        attraction: constant pull toward the goal (> 0).
+        repulsion: gain of the push of an echo at distance r, ``repulsion / r**2`` (>= 0).
+        safety_margin: clearance beyond the body radius at which the robot stops.
+        slow_distance: distance over which the speed ramps up from 0 (> 0).
+    """
+
+    attraction: float = 1.0
+    repulsion: float = 0.05
+    safety_margin: float = 0.08
+    slow_distance: float = 0.6
+
+    def __post_init__(self) -> None:
+        require_positive("VFFParams", "attraction", self.attraction)
+        require_non_negative("VFFParams", "repulsion", self.repulsion)
+        require_non_negative("VFFParams", "safety_margin", self.safety_margin)
+        require_positive("VFFParams", "slow_distance", self.slow_distance)
+
+
+class VFFNavigator:
+    """Virtual force field on the sonar ring (no local-minimum escape)."""
+
+    name = "vff"
+
+    def __init__(self, robot: Unicycle, sonar: SonarRing, params: VFFParams | None = None):
+        self.robot = robot
+        self.sonar = sonar
+        self.params = params or VFFParams()
+
+    def reset(self) -> None:
+        """Stateless: nothing to forget."""
+
+    def decide(self, pose: np.ndarray, ranges: np.ndarray, goal: np.ndarray) -> NavDecision:
+        p = self.params
+        heading = float(pose[2])
+        g = np.asarray(goal, dtype=float) - pose[:2]
+        force = p.attraction * g / max(float(np.hypot(*g)), 1e-12)
+        echo = ranges < self.sonar.max_range
+        if np.any(echo):
+            a = self.sonar.angles[echo] + heading
+            r = np.maximum(ranges[echo], 1e-3)
+            w = p.repulsion * (1.0 / r - 1.0 / self.sonar.max_range) / r
+            force = force - np.array([np.sum(w * np.cos(a)), np.sum(w * np.sin(a))])
+        err = wrap_angle(math.atan2(force[1], force[0]) - heading)
+        v, omega = _command(self.robot, self.sonar, ranges, err, p.safety_margin,
+                            p.slow_distance)
+        return NavDecision(v=v, omega=omega, target=np.asarray(goal, dtype=float))
+
+
+@dataclass(frozen=True)
+class VFHParams:
+    """Vector field histogram settings.
+
+    Attributes:
+        threshold_distance: echoes closer than this block directions (> 0).
+        safety_margin: enlargement of each echo beyond the body radius (>= 0);
+            also the stopping clearance of the speed law.
+        slow_distance: distance over which the speed ramps up from 0 (> 0).
+    """
+
+    threshold_distance: float = 1.0
+    safety_margin: float = 0.08
+    slow_distance: float = 0.6
+
+    def __post_init__(self) -> None:
+        require_positive("VFHParams", "threshold_distance", self.threshold_distance)
+        require_non_negative("VFHParams", "safety_margin", self.safety_margin)
+        require_positive("VFHParams", "slow_distance", self.slow_distance)
+
+
+class VFHNavigator:
+    """Binary polar histogram on the sonar ring (no local-minimum escape)."""
+
+    name = "vfh"
+
+    def __init__(self, robot: Unicycle, sonar: SonarRing, params: VFHParams | None = None):
+        self.robot = robot
+        self.sonar = sonar
+        self.params = params or VFHParams()
+
+    def reset(self) -> None:
+        """Stateless: nothing to forget."""
+
+    def free_directions(self, ranges: np.ndarray) -> np.ndarray:
+        """(n_beams,) mask of the beam directions not blocked by a near, enlarged echo."""
+        a = self.sonar.angles
+        near = ranges < self.params.threshold_distance
+        if not np.any(near):
+            return np.ones(a.shape[0], dtype=bool)
+        r = np.maximum(ranges[near], 1e-6)
+        width = np.arcsin(np.minimum(1.0, (self.robot.radius + self.params.safety_margin) / r))
+        blocked = np.abs(a[:, None] - a[near][None, :]) <= width[None, :] + 0.5 * self.sonar.spacing
+        return ~np.any(blocked, axis=1)
+
+    def decide(self, pose: np.ndarray, ranges: np.ndarray, goal: np.ndarray) -> NavDecision:
+        p = self.params
+        heading = float(pose[2])
+        goal = np.asarray(goal, dtype=float)
+        g = wrap_angle(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - heading)
+        a = self.sonar.angles
+        free = self.free_directions(ranges)
+        half_fov = 0.5 * math.radians(self.sonar.fov_deg)
+        if abs(g) > half_fov or not np.any(free):
+            # goal behind or all blocked: turn in place toward the goal side
+            omega = math.copysign(self.robot.max_turn_rate, g if g != 0 else 1.0)
+            return NavDecision(v=0.0, omega=omega, target=goal)
+        k = int(np.argmin(np.abs(a - g)))
+        if free[k]:
+            err = g
+        else:
+            idx = np.flatnonzero(free)
+            err = float(a[idx[np.argmin(np.abs(a[idx] - g))]])
+        v, omega = _command(self.robot, self.sonar, ranges, err, p.safety_margin,
+                            p.slow_distance)
+        return NavDecision(v=v, omega=omega, target=goal)

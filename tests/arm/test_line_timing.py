@@ -1,0 +1,185 @@
+"""The ``line`` time model: time-optimal straight lines under joint and Cartesian limits.
+
+Oracles: the closed-form trapezoid when the joint limits are slack, toppra
+(an independent TOPP-RA implementation, optional) on random legs, and the
+joint-space optimum as a lower bound.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from subtask_opt.arm.model import CartesianLimits, JointLimits, load_arm
+from subtask_opt.arm.sequencing import SequencingProblem, solve
+from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
+from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE, travel_times
+from subtask_opt.base.errors import NoPathError, ParameterError
+
+_ARMS: dict = {}
+
+
+def _arm(name: str):
+    if name not in _ARMS:
+        _ARMS[name] = load_arm(name)
+    return _ARMS[name]
+
+
+def _slack_joints(name: str, kw: float = 1e6):
+    """The robot with joint limits far above anything the Cartesian limits need."""
+    arm = _arm(name)
+    jl = arm.joint_limits
+    cl = arm.cartesian_limits
+    return load_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, [1e7, 1e7], [1e7, 1e7]),
+                    cartesian_limits=CartesianLimits(cl.kv, cl.ka, kw, kw))
+
+
+@pytest.mark.parametrize("robot", ["planar_2r", "asr_twodof"])
+def test_line_equals_the_closed_form_trapezoid_when_joints_are_slack(robot: str) -> None:
+    arm = _slack_joints(robot)
+    s = random_subtasks(arm, 8, seed=3)
+    line = travel_times(s, arm, "line")
+    trap = travel_times(s, arm, "trapezoid", check_legs=False)
+    lines = line.moves() == MOVE_LINE
+    assert lines.sum() >= 20  # most legs are straight lines
+    np.testing.assert_allclose(line.matrix[lines], trap.matrix[lines], rtol=1e-3)
+
+
+def _toppra_time(arm, p0, p1, branch) -> float:
+    """toppra on the joint path of the line (sampled by IK), with s and the tool angle as
+    extra path coordinates so that Kv, Ka, Kw, Kw_dot become its joint limits."""
+    ta = pytest.importorskip("toppra")
+    import toppra.algorithm as algo
+    import toppra.constraint as constraint
+
+    ta.setup_logging("WARNING")
+    d = float(np.hypot(*(p1 - p0)))
+    s = np.linspace(0.0, d, 801)
+    q = arm.ik(p0 + s[:, None] * (p1 - p0) / d)[:, branch]
+    q = np.unwrap(q, axis=0)
+    phi = np.unwrap([arm.fk(qk)[2] for qk in q])
+    path = ta.SplineInterpolator(s, np.column_stack([q, s, phi]))
+    jl, cl = arm.joint_limits, arm.cartesian_limits
+    vlim = np.array([*jl.velocity, cl.kv, cl.kw])
+    alim = np.array([*jl.acceleration, cl.ka, cl.kw_dot])
+    inst = algo.TOPPRA(
+        [constraint.JointVelocityConstraint(np.column_stack([-vlim, vlim])),
+         constraint.JointAccelerationConstraint(
+             np.column_stack([-alim, alim]),
+             discretization_scheme=constraint.DiscretizationType.Interpolation)],
+        path, gridpoints=np.linspace(0.0, d, 1001), parametrizer="ParametrizeConstAccel")
+    return float(inst.compute_trajectory(0, 0).duration)
+
+
+@pytest.mark.parametrize("robot", ["planar_2r", "asr_twodof"])
+def test_line_matches_toppra_on_random_legs(robot: str) -> None:
+    pytest.importorskip("toppra")
+    arm = _arm(robot)
+    s = random_subtasks(arm, 6, seed=11)
+    res = travel_times(s, arm, "line")
+    moves = res.moves()
+    checked = 0
+    for i in range(6):
+        for j in range(i + 1, 6):
+            if moves[i, j] != MOVE_LINE:
+                continue
+            expected = _toppra_time(arm, s.points[i], s.points[j], res.configurations[i])
+            assert res.matrix[i, j] == pytest.approx(expected, rel=5e-3)
+            checked += 1
+    assert checked >= 3
+
+
+def test_line_is_never_faster_than_the_joint_optimum() -> None:
+    # asr_twodof has no jerk limit: the joint model is the unconstrained joint-space optimum.
+    arm = _arm("asr_twodof")
+    s = random_subtasks(arm, 10, seed=5)
+    line = travel_times(s, arm, "line")
+    joint = travel_times(s, arm, "joint")
+    assert np.all(line.branch_times >= joint.branch_times * (1 - 1e-9))
+
+
+def test_line_converges_with_the_grid() -> None:
+    arm = _arm("planar_2r")
+    s = random_subtasks(arm, 5, seed=2)
+    coarse = travel_times(s, arm, "line", line_grid=128).branch_times
+    fine = travel_times(s, arm, "line", line_grid=2048).branch_times
+    ok = np.isfinite(fine)
+    np.testing.assert_allclose(coarse[ok], fine[ok], rtol=5e-3)
+    assert np.all(coarse[ok] >= fine[ok] * (1 - 1e-9))  # a coarser grid is more conservative
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.sampled_from(["planar_2r", "asr_twodof"]), st.integers(0, 10_000))
+def test_line_tensor_invariants(robot: str, seed: int) -> None:
+    arm = _arm(robot)
+    s = random_subtasks(arm, 5, seed=seed)
+    res = travel_times(s, arm, "line")
+    t = res.branch_times
+    np.testing.assert_allclose(t, t.transpose(2, 3, 0, 1), rtol=1e-12)
+    d = np.hypot(*(s.points[:, None] - s.points[None]).transpose(2, 0, 1))
+    for c in range(2):  # straight lines respect Kv (joint moves answer to joint limits only)
+        line = res.branch_moves[:, c, :, c] == MOVE_LINE
+        assert np.all(t[:, c, :, c][line] >= d[line] / arm.cartesian_limits.kv)
+    # a line never changes elbow branch
+    assert not np.any(res.branch_moves[:, 0, :, 1] == MOVE_LINE)
+
+
+def test_line_through_the_inner_disc_is_reported_and_replaced_or_excluded() -> None:
+    arm = _arm("asr_twodof")
+    bx, by = arm.base_xy
+    r = 0.5 * (arm.r_min + arm.r_max)
+    pts = np.array([[bx - r, by], [bx + r, by], [bx, by + r]])
+    s = SubtaskSet(pts)
+    res = travel_times(s, arm, "line")
+    assert res.line_failure(0, 1, 0, 0) == "leaves the reachable annulus"
+    assert res.moves()[0, 1] == MOVE_JOINT
+    joint = travel_times(s, arm, "joint")
+    assert res.matrix[0, 1] == joint.matrix[0, 1]
+    excl = travel_times(s, arm, "line", line_fallback="exclude")
+    assert math.isinf(excl.matrix[0, 1]) and excl.moves()[0, 1] == MOVE_NONE
+    # every closed tour of 3 subtasks uses the impossible line
+    for configurations in ("fixed", "optimize"):
+        problem = SequencingProblem(s, arm, time_model="line", line_fallback="exclude",
+                                    configurations=configurations)
+        with pytest.raises(NoPathError, match="excluded straight lines"):
+            solve(problem, seed=0)
+    # the fallback drives it as a joint move and says so
+    result = solve(SequencingProblem(s, arm, time_model="line"), seed=0)
+    assert "joint" in result.leg_moves
+    report = result.infeasible_legs
+    assert report["n_infeasible_lines"] >= 1
+    assert any(leg["reason"] == "leaves the reachable annulus"
+               for leg in report["tour_legs_not_straight"])
+
+
+def test_line_past_a_joint_limit_is_reported() -> None:
+    arm = _arm("planar_2r")
+    s = random_subtasks(arm, 12, seed=0)
+    res = travel_times(s, arm, "line")
+    reasons = {res.line_failure(i, j, c, c) for i in range(12) for j in range(12) if i != j
+               for c in range(2) if np.isfinite(res.branch_joints[[i, j], c]).all()}
+    assert "passes a joint limit" in reasons
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"line_fallback": "teleport"}, "line_fallback"),
+    ({"line_grid": 3}, "line_grid"),
+    ({"line_grid": 64.5}, "line_grid"),
+])
+def test_line_bad_parameters(kwargs: dict, match: str) -> None:
+    arm = _arm("planar_2r")
+    with pytest.raises(ParameterError, match=match):
+        travel_times(random_subtasks(arm, 4, seed=0), arm, "line", **kwargs)
+
+
+def test_missing_or_non_positive_limits_are_rejected() -> None:
+    with pytest.raises(ParameterError, match="acceleration"):
+        JointLimits([-1, -1], [1, 1], [1, 1], [0.0, 1.0])
+    with pytest.raises(ParameterError, match="velocity"):
+        JointLimits([-1, -1], [1, 1], None, [1, 1])
+    with pytest.raises(ParameterError, match="kv"):
+        CartesianLimits(-0.1, 1.0, 1.0, 1.0)

@@ -1,0 +1,142 @@
+"""Sequencing API: optimality against exact oracles, reproducibility, validation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from subtask_opt import (
+    MaxGenerations,
+    NoImprovement,
+    SequencingProblem,
+    SolverParams,
+    TargetCost,
+    builtin_case,
+    load_arm,
+    solve,
+)
+from subtask_opt.arm.exact import held_karp, milp_optimum
+from subtask_opt.base.errors import InputDataError, ParameterError
+
+
+def _euclidean(seed: int, n: int) -> np.ndarray:
+    pts = np.random.default_rng(seed).random((n, 2))
+    return np.hypot(*(pts[:, None] - pts[None]).transpose(2, 0, 1))
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return load_arm("planar_2r")
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_default_preset_matches_held_karp_on_small_instances(seed):
+    n = 5 + seed
+    m = _euclidean(seed, n)
+    result = solve(SequencingProblem.from_matrix(m), seed=seed)
+    assert result.total_time == pytest.approx(held_karp(m)[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_default_preset_matches_held_karp_on_asymmetric_instances(seed):
+    rng = np.random.default_rng(seed)
+    m = rng.random((8, 8)) * 5
+    np.fill_diagonal(m, 0)
+    problem = SequencingProblem.from_matrix(m)
+    assert not problem.symmetric
+    result = solve(problem, seed=seed)
+    assert result.total_time == pytest.approx(held_karp(m)[0], rel=1e-12)
+
+
+def test_paper_preset_reaches_the_optimum_of_a_small_instance():
+    m = _euclidean(11, 8)
+    result = solve(SequencingProblem.from_matrix(m), seed=3, params=SolverParams.paper(),
+                   stop=[MaxGenerations(3000)])
+    assert result.total_time == pytest.approx(held_karp(m)[0], rel=1e-12)
+    assert result.restarts > 0
+
+
+@pytest.mark.parametrize(("case", "model"), [("square20", "trapezoid"), ("random30", "joint"),
+                                             ("random30", "paper")])
+def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
+    problem = SequencingProblem(builtin_case(case, arm, seed=0), arm, time_model=model)
+    optimum, _ = milp_optimum(problem.matrix)
+    result = solve(problem, seed=0)
+    assert result.total_time == pytest.approx(optimum, rel=1e-9)
+
+
+def test_result_is_consistent(arm):
+    problem = SequencingProblem(builtin_case("square20", arm), arm, first=7)
+    r = solve(problem, seed=4)
+    assert r.order[0] == 7
+    assert sorted(r.order.tolist()) == list(range(20))
+    np.testing.assert_allclose(r.leg_times, problem.matrix[r.order, np.roll(r.order, -1)])
+    assert r.total_time == pytest.approx(r.leg_times.sum())
+    assert r.total_time == pytest.approx(problem.tour_time(r.order))
+    assert r.history.generations == r.generations
+    assert r.history.best_cost[-1] == pytest.approx(r.total_time)
+    assert r.robot == "planar_2r" and r.time_model == "trapezoid"
+    d = r.to_dict()
+    assert d["order"][0] == 7 and len(d["matrix"]) == 20
+    assert "total time" in r.summary()
+
+
+def test_same_seed_same_result(arm):
+    problem = SequencingProblem(builtin_case("random30", arm, seed=2), arm)
+    for params in (SolverParams(), SolverParams.paper()):
+        a = solve(problem, seed=9, params=params, stop=MaxGenerations(200))
+        b = solve(problem, seed=9, params=params, stop=MaxGenerations(200))
+        np.testing.assert_array_equal(a.order, b.order)
+        np.testing.assert_array_equal(a.history.best_cost, b.history.best_cost)
+        assert (a.generations, a.restarts) == (b.generations, b.restarts)
+
+
+def test_stopping_criteria_are_honoured():
+    m = _euclidean(5, 25)
+    problem = SequencingProblem.from_matrix(m)
+    assert solve(problem, seed=0, stop=MaxGenerations(17),
+                 params=SolverParams.paper()).generations == 17
+    r = solve(problem, seed=0, stop=[NoImprovement(5), MaxGenerations(10_000)])
+    assert r.generations - r.history.generation_of_best() == 5
+    loose = solve(problem, seed=0, stop=[TargetCost(1e9), MaxGenerations(100)])
+    assert loose.generations <= 1
+
+
+@pytest.mark.parametrize(("matrix", "match"), [
+    (np.ones((3, 4)), "square"),
+    (np.ones((2, 2)), "at least 3"),
+    (np.array([[0, 1, np.nan], [1, 0, 1], [1, 1, 0]]), "from subtask 0 to 2"),
+    (np.array([[0, 1, np.inf], [1, 0, 1], [1, 1, 0]]), "must be finite"),
+    (np.array([[0, -1, 1], [1, 0, 1], [1, 1, 0.0]]), "negative"),
+])
+def test_bad_matrices_are_rejected(matrix, match):
+    with pytest.raises(InputDataError, match=match):
+        SequencingProblem.from_matrix(matrix)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"stop": []}, "at least one"),
+    ({"stop": TargetCost(1.0)}, "TargetCost alone"),
+])
+def test_bad_solve_arguments_are_rejected(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        solve(SequencingProblem.from_matrix(_euclidean(0, 5)), **kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "field"), [
+    ({"preset": "fast"}, "preset"), ({"population": 2}, "population"),
+    ({"grasp_share": 2.0}, "grasp_share"), ({"max_segment": 0}, "max_segment"),
+    ({"neighbours": 0}, "neighbours"), ({"convergence_tol": -1.0}, "convergence_tol"),
+])
+def test_bad_solver_params_name_the_field(kwargs, field):
+    with pytest.raises(ParameterError, match=field):
+        SolverParams(**kwargs)
+
+
+def test_bad_first_subtask_and_missing_inputs(arm):
+    with pytest.raises(ParameterError, match="first"):
+        SequencingProblem.from_matrix(_euclidean(0, 5), first=5)
+    with pytest.raises(ParameterError, match="needs subtasks and an arm"):
+        SequencingProblem(None, arm)
+    with pytest.raises(ParameterError, match="permutation"):
+        SequencingProblem.from_matrix(_euclidean(0, 5)).tour_time(np.array([0, 1, 1, 2, 3]))

@@ -1,0 +1,176 @@
+"""Executable trajectories of solved tours: validity, duration, sampling, CSV, figures."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np
+import pytest
+
+from subtask_opt.arm.model import JointLimits, load_arm
+from subtask_opt.arm.sequencing import SequencingProblem, solve
+from subtask_opt.arm.tasks import builtin_case, random_subtasks
+from subtask_opt.arm.trajectory import (
+    CSV_HEADER,
+    TourTrajectory,
+    tour_trajectory,
+    validate_trajectory,
+)
+from subtask_opt.base.errors import InputDataError, ParameterError
+
+_ARMS: dict = {}
+
+
+def _arm(name: str):
+    if name not in _ARMS:
+        _ARMS[name] = load_arm(name)
+    return _ARMS[name]
+
+
+def _solved(robot: str, case: str, model: str):
+    arm = _arm(robot)
+    configurations = "optimize" if model in ("joint", "line") else "fixed"
+    problem = SequencingProblem(builtin_case(case, arm, seed=0), arm, time_model=model,
+                                configurations=configurations)
+    return problem, solve(problem, seed=0)
+
+
+@pytest.mark.parametrize("robot", ["planar_2r", "asr_twodof"])
+@pytest.mark.parametrize("case", ["square20", "random30"])
+@pytest.mark.parametrize("model", ["joint", "line", "trapezoid", "paper"])
+def test_every_tour_executes_within_the_limits(robot: str, case: str, model: str) -> None:
+    problem, result = _solved(robot, case, model)
+    trajectory = tour_trajectory(problem, result)
+    report = validate_trajectory(trajectory, dt=2e-3)
+    assert report.ok, report.violations
+    assert max(report.max_velocity_ratio) <= 1 + report.rtol
+    assert report.position_margin >= -report.qtol
+    if model in ("joint", "line"):  # executed as timed: the promised time, to round-off
+        assert trajectory.duration == pytest.approx(result.total_time, rel=1e-6)
+        assert report.duration_error < 5e-3
+    else:  # a Cartesian model's lines, driven within the joint limits
+        assert all(leg.kind in ("line", "joint") for leg in trajectory.legs)
+    # rest at every subtask, in the chosen configuration, with the tip on the subtask
+    pts = problem.subtasks.points
+    for leg in trajectory.legs:
+        q, qd, _ = trajectory.states([leg.start])
+        np.testing.assert_allclose(q[0], leg.q_from, atol=1e-9)
+        np.testing.assert_allclose(qd[0], 0.0, atol=1e-6)
+        np.testing.assert_allclose(_arm(robot).fk(q[0])[:2], pts[leg.from_subtask], atol=1e-9)
+        assert leg.from_config == result.configurations[leg.from_subtask]
+
+
+def test_joint_moves_are_jerk_limited_when_the_arm_has_jerk_limits() -> None:
+    problem, result = _solved("planar_2r", "square20", "joint")
+    trajectory = tour_trajectory(problem, result)
+    s = trajectory.sample(1e-3)
+    jerk = np.abs(np.diff(s.qdd, axis=0)) / 1e-3
+    # finite differences of a piecewise-linear acceleration: at most the jerk limit (+ a step)
+    assert np.all(jerk.max(axis=0) <= problem.arm.joint_limits.jerk * 1.01)
+    arm = _arm("asr_twodof")
+    assert arm.joint_limits.jerk is None  # asr_twodof: trapezoids, acceleration steps allowed
+
+
+def test_line_legs_follow_the_straight_line_and_are_consistent() -> None:
+    problem, result = _solved("asr_twodof", "random30", "line")
+    trajectory = tour_trajectory(problem, result)
+    legs = [leg for leg in trajectory.legs if leg.kind == "line"]
+    assert legs
+    arm = problem.arm
+    pts = problem.subtasks.points
+    for leg in legs[:5]:
+        t = np.linspace(0.0, leg.duration, 401)
+        q, qd, qdd = leg.states(t)
+        xy = np.array([arm.fk(qk)[:2] for qk in q])
+        a, b = pts[leg.from_subtask], pts[leg.to_subtask]
+        u = (b - a) / np.linalg.norm(b - a)
+        offset = (xy - a) @ np.array([-u[1], u[0]])
+        assert np.abs(offset).max() < 1e-9  # on the line
+        # velocities are the derivative of positions (central differences)
+        h = t[1] - t[0]
+        np.testing.assert_allclose((q[2:] - q[:-2]) / (2 * h), qd[1:-1], atol=2e-3 * np.max(
+            arm.joint_limits.velocity))
+        # tip speed within Kv
+        v = np.linalg.norm(np.array([arm.jacobian(qk) @ qdk for qk, qdk in zip(q, qd,
+                                                                              strict=True)]),
+                           axis=1)
+        assert v.max() <= arm.cartesian_limits.kv * (1 + 1e-3)
+
+
+def test_sampling_and_csv(tmp_path) -> None:
+    problem, result = _solved("planar_2r", "square20", "line")
+    trajectory = tour_trajectory(problem, result)
+    s = trajectory.sample(0.05)
+    assert s.t[0] == 0.0 and s.t[-1] == pytest.approx(trajectory.duration)
+    assert np.all(np.diff(s.t) > 0)
+    path = trajectory.to_csv(tmp_path / "traj.csv", dt=0.05)
+    lines = path.read_text().splitlines()
+    assert lines[0] == CSV_HEADER == "t,q1,q2,dq1,dq2,x,y"
+    table = np.loadtxt(path, delimiter=",", skiprows=1)
+    assert table.shape == (len(s.t), 7)
+    np.testing.assert_allclose(table[:, 5:], s.xy, atol=1e-8)
+    q, qd, qdd = trajectory.at_time(trajectory.duration)
+    np.testing.assert_allclose(q, trajectory.legs[0].q_from, atol=1e-9)  # closed tour
+
+
+@pytest.mark.parametrize("dt", [0.0, -0.1, float("nan")])
+def test_non_positive_dt_is_rejected(dt: float) -> None:
+    problem, result = _solved("planar_2r", "square20", "joint")
+    trajectory = tour_trajectory(problem, result)
+    with pytest.raises(ParameterError, match="dt"):
+        trajectory.sample(dt)
+    with pytest.raises(ParameterError, match="dt"):
+        validate_trajectory(trajectory, dt=dt)
+
+
+def test_validator_reports_exceeded_limits() -> None:
+    problem, result = _solved("asr_twodof", "square20", "joint")
+    trajectory = tour_trajectory(problem, result)
+    jl = trajectory.arm.joint_limits
+    slower = load_arm("asr_twodof", joint_limits=JointLimits(
+        jl.lower, jl.upper, jl.velocity / 2, jl.acceleration / 2))
+    strict = TourTrajectory(slower, trajectory.legs, trajectory.predicted_time, "joint")
+    report = validate_trajectory(strict, dt=5e-3)
+    assert not report.ok
+    text = " ".join(report.violations)
+    assert "velocity limit exceeded" in text and "acceleration limit exceeded" in text
+    assert "INVALID" in report.summary()
+    narrow = load_arm("asr_twodof", joint_limits=JointLimits(
+        jl.lower / 10, jl.upper / 10, jl.velocity, jl.acceleration))
+    report = validate_trajectory(TourTrajectory(narrow, trajectory.legs, 1.0, "joint"), dt=5e-3)
+    assert any("position limit" in v for v in report.violations)
+
+
+def test_trajectory_needs_an_arm() -> None:
+    problem = SequencingProblem.from_matrix(np.ones((4, 4)) - np.eye(4))
+    result = solve(problem, seed=0)
+    with pytest.raises(ParameterError, match="arm"):
+        tour_trajectory(problem, result)
+
+
+def test_figures_and_animation(tmp_path) -> None:
+    from subtask_opt.plotting.trajectory import (
+        animate_tour,
+        plot_executed_path,
+        plot_joint_profiles,
+    )
+
+    arm = _arm("planar_2r")
+    problem = SequencingProblem(random_subtasks(arm, 6, seed=0), arm, time_model="line",
+                                configurations="optimize")
+    result = solve(problem, seed=0)
+    trajectory = tour_trajectory(problem, result)
+    fig = plot_joint_profiles(trajectory)
+    assert len(fig.axes) == 3
+    ax = plot_executed_path(problem, trajectory)
+    assert ax.get_title().startswith("executed tour")
+    out = animate_tour(problem, trajectory, tmp_path / "tour.gif", max_frames=6)
+    assert out.read_bytes()[:6] in (b"GIF89a", b"GIF87a")
+    with pytest.raises(InputDataError, match=".gif"):
+        animate_tour(problem, trajectory, tmp_path / "tour.mp4")
+    with pytest.raises(InputDataError, match="does not exist"):
+        animate_tour(problem, trajectory, tmp_path / "nowhere" / "tour.gif")
+    with pytest.raises(ParameterError, match="fps"):
+        animate_tour(problem, trajectory, tmp_path / "t.gif", fps=0)

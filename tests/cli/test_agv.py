@@ -1,0 +1,94 @@
+"""CLI: ``subtask-opt plan agv`` and ``subtask-opt bench agv``."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+from PIL import Image
+
+from subtask_opt.cli.app import main
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    return err
+
+
+def test_plan_paper_scenario_writes_json_and_plot(tmp_path, capsys):
+    out, fig = tmp_path / "run.json", tmp_path / "run.png"
+    assert main(["plan", "agv", "--scenario", "2-2", "--json", str(out), "--plot", str(fig)]) == 0
+    text = capsys.readouterr().out
+    assert "2-2: success" in text and "replan" in text
+    data = json.loads(out.read_text())
+    assert data["outcome"] == "success" and data["delay_s"] > 0
+    kinds = [e["kind"] for e in data["events"]]
+    assert {"wait", "static", "replan", "recovery"} <= set(kinds)
+    assert len(data["trajectory"]) == len(data["times"]) and fig.stat().st_size > 0
+
+
+def test_plan_json_scenario_with_animation(tmp_path, capsys):
+    scen = {"map": ["........", "........", "........"], "start": [0, 1], "goal": [7, 1],
+            "obstacles": [{"path": [[4, 2], [4, 0]], "start_time": 2.5, "speed": 0.5}]}
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(scen))
+    gif = tmp_path / "run.gif"
+    assert main(["plan", "agv", "--scenario", str(path), "--animate", str(gif),
+                 "--frames", "12"]) == 0
+    with Image.open(gif) as im:
+        assert im.format == "GIF" and im.n_frames == 12
+    assert "success" in capsys.readouterr().out
+
+
+def test_bench_writes_the_totals(tmp_path, capsys):
+    out = tmp_path / "bench.json"
+    assert main(["bench", "agv", "--n", "6", "--seed", "3", "--json", str(out), "--quiet"]) == 0
+    data = json.loads(out.read_text())
+    for key in ("runs", "success", "collisions", "timeouts", "mean_delay_s", "min_separation"):
+        assert key in data
+    assert data["runs"] == 6 and data["collisions"] == 0
+    assert "6 runs" in capsys.readouterr().out
+
+
+def test_bench_is_reproducible(tmp_path):
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    for out in (a, b):
+        assert main(["bench", "agv", "--n", "4", "--seed", "11", "--json", str(out),
+                     "--quiet"]) == 0
+    da, db = json.loads(a.read_text()), json.loads(b.read_text())
+    da.pop("seconds"), db.pop("seconds")
+    assert da == db
+
+
+def test_bad_inputs_exit_2_with_one_line(tmp_path, capsys):
+    assert main(["plan", "agv", "--scenario", "nope"]) == 2
+    assert "unknown scenario" in _one_line_error(capsys)
+
+    bad_img = tmp_path / "bad.png"
+    bad_img.write_text("not a png")
+    scen = tmp_path / "s.json"
+    scen.write_text(json.dumps({"image": "bad.png", "start": [0, 0], "goal": [1, 1]}))
+    assert main(["plan", "agv", "--scenario", str(scen)]) == 2
+    assert "cannot read image" in _one_line_error(capsys)
+
+    Image.fromarray(np.full((40, 40), 255, dtype=np.uint8)).save(tmp_path / "ok.png")
+    scen.write_text(json.dumps({"image": "ok.png", "density_factor": 100,
+                                "start": [0, 0], "goal": [1, 1]}))
+    assert main(["plan", "agv", "--scenario", str(scen)]) == 2
+    assert "density_factor" in _one_line_error(capsys)
+
+    img = np.full((40, 40), 255, dtype=np.uint8)
+    img[:10, :10] = 0
+    Image.fromarray(img).save(tmp_path / "ok.png")
+    scen.write_text(json.dumps({"image": "ok.png", "start": [0, 0], "goal": [3, 3]}))
+    assert main(["plan", "agv", "--scenario", str(scen)]) == 2
+    assert "start (0, 0) is on an obstacle" in _one_line_error(capsys)
+
+    scen.write_text(json.dumps({"image": "ok.png", "start": [1, 1], "goal": [3, 3],
+                                "params": {"dt": -1}}))
+    assert main(["plan", "agv", "--scenario", str(scen)]) == 2
+    assert "dt" in _one_line_error(capsys)
+
+    assert main(["bench", "agv", "--n", "0"]) == 2  # argparse usage errors exit 2 too
+    assert "--n" in _one_line_error(capsys)

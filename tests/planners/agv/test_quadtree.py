@@ -1,0 +1,138 @@
+"""Quadtree decomposition and the planner over its free leaves."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from subtask_opt.base.errors import ParameterError, UnreachableError
+from subtask_opt.planners.agv.quadtree import (
+    BLACK,
+    GREY,
+    WHITE,
+    QuadtreeParams,
+    compare_with_grid,
+    decompose,
+    plan,
+)
+from subtask_opt.planners.grid.distance_transform import DTParams
+from subtask_opt.planners.grid.distance_transform import plan as grid_plan
+from subtask_opt.planners.grid.world import GridWorld
+
+
+def _crosses_obstacle(occ: np.ndarray, path: np.ndarray, step: float = 0.01) -> bool:
+    """Independent check: sample every segment densely; a sample strictly
+    inside a blocked cell (or outside the grid) is a crossing."""
+    h, w = occ.shape
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        n = max(2, int(np.ceil(np.hypot(*(b - a)) / step)) + 1)
+        pts = a + np.linspace(0, 1, n)[:, None] * (b - a)
+        cells = np.floor(pts + 0.5).astype(int)
+        inside = np.abs(pts - cells).max(axis=1) < 0.5 - 1e-9
+        x, y = cells[:, 0], cells[:, 1]
+        if np.any((x < 0) | (x >= w) | (y < 0) | (y >= h)):
+            return True
+        if np.any(occ[y[inside], x[inside]]):
+            return True
+    return False
+
+
+def test_leaves_partition_the_grid_with_pure_colours():
+    rng = np.random.default_rng(1)
+    occ = rng.random((13, 21)) < 0.3
+    tree = decompose(occ)
+    covered = np.zeros(occ.shape, dtype=int)
+    for x0, y0, size, colour, _ in tree.leaves:
+        block = occ[y0:y0 + size, x0:x0 + size]
+        covered[y0:y0 + size, x0:x0 + size] += 1
+        if colour == WHITE:
+            assert not block.any()
+        else:
+            assert colour == BLACK and (block.all() or block.shape != (size, size))
+    np.testing.assert_array_equal(covered, 1)
+    assert tree.count(GREY) == 0  # min_size 1: every grey node is split
+
+
+def test_empty_map_is_one_white_leaf_and_min_size_leaves_grey():
+    tree = decompose(np.zeros((8, 8), dtype=bool))
+    assert tree.leaves.tolist() == [[0, 0, 8, WHITE, 0]]
+    occ = np.zeros((8, 8), dtype=bool)
+    occ[0, 0] = True
+    coarse = decompose(occ, QuadtreeParams(min_size=4))
+    assert coarse.count(GREY) == 1 and coarse.count(WHITE) == 3
+
+
+def test_path_around_a_wall_and_straightening_shortens():
+    occ = np.zeros((16, 16), dtype=bool)
+    occ[2:16, 7] = True
+    world = GridWorld(occ)
+    res = plan(world, (1, 14), (14, 14))
+    assert res.success and not _crosses_obstacle(occ, res.path)
+    assert res.length <= res.info["raw_length"] + 1e-9
+    assert res.length >= np.hypot(6, 13) * 2 - 1e-6  # must go over the wall top
+    assert res.path[0].tolist() == [1, 14] and res.path[-1].tolist() == [14, 14]
+
+
+def test_no_path_and_bad_points():
+    occ = np.zeros((8, 8), dtype=bool)
+    occ[:, 4] = True
+    world = GridWorld(occ)
+    res = plan(world, (0, 0), (7, 7))
+    assert not res.success and "no path" in res.message
+    with pytest.raises(UnreachableError, match="goal"):
+        plan(world, (0, 0), (4, 3))
+    with pytest.raises(UnreachableError, match="start"):
+        plan(world, (9, 0), (7, 7))
+    with pytest.raises(ParameterError, match="min_size"):
+        QuadtreeParams(min_size=3)
+
+
+def test_compare_with_grid_reports_both():
+    rng = np.random.default_rng(2)
+    occ = rng.random((20, 20)) < 0.2
+    occ[0, 0] = occ[19, 19] = False
+    rows = compare_with_grid(GridWorld(occ), (0, 0), (19, 19), repeats=1)
+    assert set(rows) == {"quadtree", "grid"}
+    if rows["grid"]["success"]:
+        assert rows["quadtree"]["nodes"] < rows["grid"]["nodes"]
+
+
+@st.composite
+def _maps(draw):
+    h = draw(st.integers(2, 14))
+    w = draw(st.integers(2, 14))
+    density = draw(st.floats(0.0, 0.5))
+    seed = draw(st.integers(0, 2**31 - 1))
+    rng = np.random.default_rng(seed)
+    occ = rng.random((h, w)) < density
+    free = np.argwhere(~occ)
+    if len(free) < 2:
+        occ[0, 0] = occ[h - 1, w - 1] = False
+        free = np.argwhere(~occ)
+    i, j = rng.choice(len(free), size=2, replace=False)
+    (sy, sx), (gy, gx) = free[i], free[j]
+    return occ, (int(sx), int(sy)), (int(gx), int(gy))
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_maps())
+def test_quadtree_finds_a_path_iff_the_grid_planner_does(case):
+    occ, start, goal = case
+    world = GridWorld(occ)
+    ours = plan(world, start, goal)
+    grid = grid_plan(world, start, goal, params=DTParams("octile"))
+    assert ours.success == grid.success
+    if ours.success:
+        assert not _crosses_obstacle(occ, ours.path)
+        assert ours.path[0].tolist() == list(start) and ours.path[-1].tolist() == list(goal)
+        assert ours.length <= ours.info["raw_length"] + 1e-9
+        assert ours.length >= np.hypot(goal[0] - start[0], goal[1] - start[1]) - 1e-9
+
+
+def test_the_independent_check_sees_a_crossing():
+    occ = np.zeros((3, 3), dtype=bool)
+    occ[1, 1] = True
+    assert _crosses_obstacle(occ, np.array([[0.0, 0.0], [2.0, 2.0]]))
+    assert not _crosses_obstacle(occ, np.array([[0.0, 0.0], [0.0, 2.0], [2.0, 2.0]]))
