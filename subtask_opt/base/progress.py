@@ -21,8 +21,9 @@ class _NoBar:
 
 def progress_bar(enabled: bool, *, total: int | None = None, desc: str = "",
                  unit: str = "it") -> Any:
-    """A tqdm bar on stderr that appears after 1 s, or a no-op when disabled."""
-    if not enabled:
+    """A tqdm bar on stderr that appears after 1 s; a no-op when disabled or
+    when stderr is not a terminal (logs and pipes get no bar)."""
+    if not enabled or not sys.stderr.isatty():
         return _NoBar()
     from tqdm.auto import tqdm
 

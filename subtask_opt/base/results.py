@@ -9,9 +9,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
+
+from subtask_opt.base.geometry import count_turns, polyline_length
 
 
 @dataclass(frozen=True)
@@ -54,27 +57,36 @@ class History:
         }
 
 
-def polyline_length(path: np.ndarray) -> float:
-    """Euclidean length of a polyline given as a (k, 2) array."""
-    path = np.asarray(path, dtype=float)
-    if path.shape[0] < 2:
-        return 0.0
-    return float(np.sum(np.hypot(*np.diff(path, axis=0).T)))
+class Outcome(StrEnum):
+    """How a plan ended; shared by every planner family (JSON: the value)."""
+
+    SUCCESS = "success"
+    NO_PATH = "no_path"
+    STALL = "stall"
+    TIMEOUT = "timeout"
+    COLLISION = "collision"
 
 
-def count_turns(path: np.ndarray, tol_deg: float = 1e-6) -> int:
-    """Number of heading changes along a polyline (collinear points ignored)."""
-    path = np.asarray(path, dtype=float)
-    if path.shape[0] < 3:
-        return 0
-    d = np.diff(path, axis=0)
-    d = d[np.hypot(d[:, 0], d[:, 1]) > 0]
-    if d.shape[0] < 2:
-        return 0
-    cross = d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0]
-    dot = np.sum(d[:-1] * d[1:], axis=1)
-    angles = np.degrees(np.abs(np.arctan2(cross, dot)))
-    return int(np.count_nonzero(angles > tol_deg))
+OUTCOMES = tuple(o.value for o in Outcome)
+
+
+def _check_json_safe(value: Any, where: str, depth: int = 0) -> None:
+    """Raise ValueError unless ``value`` is plain JSON data (no numpy arrays)."""
+    if depth > 32:
+        raise ValueError(f"{where} is nested deeper than 32 levels")
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return
+    if isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _check_json_safe(v, f"{where}[{i}]", depth + 1)
+        return
+    if isinstance(value, dict):
+        for k, v in value.items():
+            if not isinstance(k, str):
+                raise ValueError(f"{where} has a non-string key {k!r}")
+            _check_json_safe(v, f"{where}[{k!r}]", depth + 1)
+        return
+    raise ValueError(f"{where} must be JSON data, got {type(value).__name__}")
 
 
 @dataclass(frozen=True)
@@ -91,7 +103,10 @@ class PlanResult:
         runtime_s: wall time of the planning call (after JIT warm-up if the
             caller warmed up).
         history: per-iteration costs for iterative planners (GA, PSO).
-        info: planner-specific extras (JSON-serialisable).
+        info: planner-specific extras; JSON-safe (str, bool, int, float, None,
+            lists and dicts of them), checked here.
+        outcome: how the plan ended (``"success"``, ``"no_path"``, ``"stall"``,
+            ``"timeout"``, ``"collision"``); default: from ``success``.
     """
 
     path: np.ndarray
@@ -101,6 +116,20 @@ class PlanResult:
     runtime_s: float = 0.0
     history: History | None = None
     info: dict[str, Any] = field(default_factory=dict)
+    outcome: Outcome | str = ""
+
+    def __post_init__(self) -> None:
+        path = np.asarray(self.path, dtype=float).reshape(-1, 2)
+        object.__setattr__(self, "path", path)
+        if not self.outcome:
+            object.__setattr__(self, "outcome", Outcome.SUCCESS if self.success else Outcome.NO_PATH)
+        if self.outcome not in OUTCOMES:
+            raise ValueError(f"PlanResult.outcome must be one of {OUTCOMES}, got {self.outcome!r}")
+        object.__setattr__(self, "outcome", Outcome(self.outcome))
+        if self.success != (self.outcome == "success"):
+            raise ValueError(f"PlanResult: success={self.success} contradicts "
+                             f"outcome={self.outcome!r}")
+        _check_json_safe(self.info, "PlanResult.info")
 
     @property
     def length(self) -> float:
@@ -119,10 +148,11 @@ class PlanResult:
             "turns": self.turns,
             "path": np.asarray(self.path, dtype=float).tolist(),
             "runtime_s": self.runtime_s,
+            "outcome": str(self.outcome.value if isinstance(self.outcome, Outcome) else self.outcome),
         }
         if self.history is not None:
             out["history"] = self.history.to_dict()
-        out.update(self.info)
+        out["info"] = dict(self.info)
         return out
 
     def summary(self) -> str:

@@ -26,6 +26,83 @@ def point(text: str, dims: int = 2) -> tuple[float, ...]:
     return values
 
 
+EXIT_OK = 0
+"""The job succeeded."""
+EXIT_FAILED = 1
+"""The job ran and failed: no path, stall, collision, timeout, infeasible tour."""
+EXIT_BAD_INPUT = 2
+"""A user mistake: bad option, unreadable or malformed input (one line on stderr)."""
+
+SEED_LIMIT = 2**63
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+ANIMATION_SUFFIXES = (".gif",)
+
+
+def seed(text: str) -> int:
+    """A random seed: a whole number in [0, 2**63)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 0 <= value < SEED_LIMIT:
+        raise argparse.ArgumentTypeError(f"a seed must be in [0, 2**63), got {text!r}")
+    return value
+
+
+def _output(text: str, suffixes: tuple[str, ...] | None) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError("the output path is empty")
+    if suffixes and Path(text).suffix.lower() not in suffixes:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} must end in {' or '.join(suffixes)}")
+    if Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder, not a file")
+    return text
+
+
+def json_output(text: str) -> str:
+    """A path for ``--json`` (not empty, not a folder)."""
+    return _output(text, None)
+
+
+def plot_output(text: str) -> str:
+    """A path for ``--plot`` (.png, .pdf or .svg)."""
+    return _output(text, PLOT_SUFFIXES)
+
+
+def animation_output(text: str) -> str:
+    """A path for ``--animate`` (.gif)."""
+    return _output(text, ANIMATION_SUFFIXES)
+
+
+def add_outputs(parser: argparse.ArgumentParser, *, what: str = "the result",
+                plot: str | None = "a figure of the result") -> None:
+    """``--json OUT`` and (unless ``plot`` is None) ``--plot OUT.png``."""
+    parser.add_argument("--json", metavar="OUT.json", type=json_output,
+                        help=f"write {what} as JSON")
+    if plot is not None:
+        parser.add_argument("--plot", metavar="OUT.png", type=plot_output,
+                            help=f"write {plot} (.png, .pdf or .svg)")
+
+
+def add_no_progress(parser: argparse.ArgumentParser) -> None:
+    """The one progress switch: bars are drawn only on a terminal, and never with it."""
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (bars appear only on a terminal anyway)")
+
+
+def refuse_overwriting_inputs(inputs: list[str | Path | None],
+                              outputs: list[str | Path | None]) -> None:
+    """Raise :class:`InputDataError` when an output path is one of the input files."""
+    from subtask_opt.base.errors import ParameterError
+
+    existing = {Path(i).resolve() for i in inputs if i and Path(i).is_file()}
+    for out in outputs:
+        if out and Path(out).resolve() in existing:
+            raise ParameterError(f"output {str(out)!r} is also an input file; "
+                                 "choose another path")
+
+
 def point3(text: str) -> tuple[float, ...]:
     return point(text, 3)
 

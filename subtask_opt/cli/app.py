@@ -8,17 +8,27 @@ handlers, so ``--help`` is instant. A user mistake prints one line and exits 2.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
+from typing import Any
 from collections.abc import Sequence
 
-from subtask_opt.base.errors import SubtaskOptError
+from subtask_opt.base.errors import NoPathError, SubtaskOptError
 
-EXIT_OK = 0
-EXIT_BAD_INPUT = 2
+from subtask_opt.cli._common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
+
+EPILOG = ("exit codes: 0 the job succeeded; 1 it ran and failed (no path, stall, collision, "
+          "infeasible); 2 bad input (one line on stderr)")
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports a usage mistake as one line and exit code 2."""
+    """argparse that reports a usage mistake as one line and exit code 2, and
+    reads ``--start -50,-50`` as a value, not as an option."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("epilog", EPILOG)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d[\d.,eE+-]*$")
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
@@ -46,7 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; return the process exit code (0 ok, 2 bad input)."""
+    """Run the CLI; return the process exit code (see :data:`EPILOG`)."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -54,6 +64,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         return int(args.handler(args) or EXIT_OK)
+    except NoPathError as exc:  # the job ran, and no answer exists
+        print(f"subtask-opt: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     except SubtaskOptError as exc:
         print(f"subtask-opt: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -21,13 +21,12 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from enum import Enum
 from typing import Any, Protocol
 
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError
-from subtask_opt.base.results import PlanResult
+from subtask_opt.base.results import Outcome, PlanResult
 
 FAMILIES: dict[str, tuple[str, ...]] = {
     "grid": ("subtask_opt.planners.grid.distance_transform", "subtask_opt.planners.grid.ga_path",
@@ -39,18 +38,11 @@ FAMILIES: dict[str, tuple[str, ...]] = {
 }
 """Family -> the modules whose import registers its planners."""
 
+__all__ = ["FAMILIES", "SEED_LIMIT", "Outcome", "Planner", "PlannerInfo", "check_seed",
+           "get_planner", "planners", "register"]
+
 SEED_LIMIT = 2**63
 """Seeds are integers in [0, SEED_LIMIT)."""
-
-
-class Outcome(str, Enum):
-    """How a plan ended; shared by every family (JSON: the value)."""
-
-    SUCCESS = "success"
-    NO_PATH = "no_path"
-    STALL = "stall"
-    TIMEOUT = "timeout"
-    COLLISION = "collision"
 
 
 class Planner(Protocol):

@@ -1,4 +1,4 @@
-"""Tests of subtask_opt.arm.timing.models: 1-DOF profile times, the three time models, the leg check."""
+"""Tests of the time models: 1-DOF profile times, the three time models, the leg check."""
 
 from __future__ import annotations
 

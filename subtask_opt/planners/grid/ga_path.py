@@ -1,7 +1,7 @@
 """GA path planner on an occupancy grid (the thesis' chapter 4), on the shared GA core.
 
 Genes are integer cells (x, y) stored as ``y * width + x``; a chromosome is a
-variable-length polyline start -> waypoints -> goal (:mod:`subtask_opt.planners.grid._waypoint_kernels`).
+variable-length polyline start -> waypoints -> goal (:mod:`._waypoint_kernels`).
 The loop is :func:`subtask_opt.ga.loop.run_ga`: elitism, single-point
 crossover, non-uniform mutation, stopping criteria from :mod:`subtask_opt.base.stop`.
 
