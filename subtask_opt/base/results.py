@@ -122,7 +122,8 @@ class PlanResult:
         path = np.asarray(self.path, dtype=float).reshape(-1, 2)
         object.__setattr__(self, "path", path)
         if not self.outcome:
-            object.__setattr__(self, "outcome", Outcome.SUCCESS if self.success else Outcome.NO_PATH)
+            default = Outcome.SUCCESS if self.success else Outcome.NO_PATH
+            object.__setattr__(self, "outcome", default)
         if self.outcome not in OUTCOMES:
             raise ValueError(f"PlanResult.outcome must be one of {OUTCOMES}, got {self.outcome!r}")
         object.__setattr__(self, "outcome", Outcome(self.outcome))
@@ -148,7 +149,7 @@ class PlanResult:
             "turns": self.turns,
             "path": np.asarray(self.path, dtype=float).tolist(),
             "runtime_s": self.runtime_s,
-            "outcome": str(self.outcome.value if isinstance(self.outcome, Outcome) else self.outcome),
+            "outcome": Outcome(self.outcome).value,
         }
         if self.history is not None:
             out["history"] = self.history.to_dict()

@@ -10,11 +10,10 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-from typing import Any
 from collections.abc import Sequence
+from typing import Any
 
 from subtask_opt.base.errors import NoPathError, SubtaskOptError
-
 from subtask_opt.cli._common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
 
 EPILOG = ("exit codes: 0 the job succeeded; 1 it ran and failed (no path, stall, collision, "
