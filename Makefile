@@ -1,12 +1,15 @@
 # Two commands do everything on a fresh machine with python3 (3.11+) and make:
 #   make demo   - create .venv, install, solve the built-in 30-subtask case, write figures
 #   make test   - create .venv with the dev extras if needed, run all tests and notebooks
+# More: make lint (ruff + mypy), make coverage (kernels as Python), make fuzz (long
+# fuzzing), make bench (benchmarks, peers included), make clean (also the kernel cache).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 OUT := out
+FUZZ_EXAMPLES ?= 2000
 
-.PHONY: demo test bench lint clean
+.PHONY: demo test bench lint coverage fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -27,12 +30,15 @@ $(VENV)/.installed-bench: pyproject.toml | $(BIN)/python
 demo: $(VENV)/.installed
 	MPLBACKEND=Agg $(BIN)/subtask-opt solve --case random30 --seed 1 \
 		--json $(OUT)/random30.json --plot $(OUT)/random30.png
-	@echo "figures and JSON written to $(OUT)/"
+	@echo
+	@echo "Figures and JSON are in $(OUT)/: open $(OUT)/random30.png in any image viewer;"
+	@echo "$(OUT)/random30.json holds the order, times and the arm's report of every leg."
 
 test: $(VENV)/.installed-dev
 	MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests examples
 
 bench: $(VENV)/.installed-bench
+	MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 -m bench tests
 	$(BIN)/python benchmarks/sequencing.py --json $(OUT)/bench/sequencing.json
 	$(BIN)/python benchmarks/fidelity.py --json $(OUT)/bench/fidelity.json
 	$(BIN)/python benchmarks/grid.py --json $(OUT)/bench/grid.json
@@ -42,6 +48,15 @@ bench: $(VENV)/.installed-bench
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check subtask_opt tests benchmarks
+	$(BIN)/mypy subtask_opt
+
+coverage: $(VENV)/.installed-dev
+	NUMBA_DISABLE_JIT=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --cov=subtask_opt \
+		--cov-report=term:skip-covered tests
+
+fuzz: $(VENV)/.installed-dev
+	FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 -m fuzz tests
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	-[ -x $(BIN)/python ] && $(BIN)/python -m subtask_opt._kernel_cache --clear
+	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis .mypy_cache .ruff_cache .coverage

@@ -18,6 +18,8 @@ import hashlib
 import os
 import shutil
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numba
@@ -66,6 +68,31 @@ def mark_warm(group: str) -> None:
         (CACHE_DIR / f"{group}.warm").touch()
     except OSError:  # a read-only cache only costs recompilation
         pass
+
+
+_announced = False
+
+
+@contextmanager
+def compiling(group: str, what: str) -> Iterator[None]:
+    """Around the first call of a group of kernels: say once that numba is compiling.
+
+    When ``group`` is not yet in the cache, one line goes to stderr at once and,
+    on a terminal, a ticking elapsed-time bar; the group is marked warm after.
+    """
+    global _announced
+    if is_warm(group):
+        yield
+        return
+    from subtask_opt.base.progress import elapsed_ticker
+
+    if not _announced:
+        print(f"subtask-opt: compiling {what} once (numba; cached afterwards in {CACHE_DIR})",
+              file=sys.stderr, flush=True)
+        _announced = True
+    with elapsed_ticker(f"compiling {what}"):
+        yield
+    mark_warm(group)
 
 
 def clear() -> Path:

@@ -24,6 +24,7 @@ import importlib.metadata
 import importlib.resources
 import json
 import math
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -142,6 +143,7 @@ class Arm:
         self.name = name
         self.model = model
         self.data = model.createData()
+        self._data_lock = threading.Lock()  # Pinocchio's data is scratch: one caller at a time
         self.tip_frame_id = int(model.getFrameId(tip_frame))
         self.joint_limits = joint_limits
         self.cartesian_limits = cartesian_limits
@@ -219,27 +221,51 @@ class Arm:
         import pinocchio as pin
 
         q = self._q(q)
-        pin.framesForwardKinematics(self.model, self.data, q)
-        tip = self.data.oMf[self.tip_frame_id]
-        return np.array([tip.translation[0], tip.translation[1], self._yaw(tip.rotation)])
+        with self._data_lock:
+            pin.framesForwardKinematics(self.model, self.data, q)
+            tip = self.data.oMf[self.tip_frame_id]
+            return np.array([tip.translation[0], tip.translation[1], self._yaw(tip.rotation)])
 
     def link_points(self, q: Any) -> np.ndarray:
         """(3, 2) positions of the shoulder, the elbow and the tip at q (for drawing the arm)."""
         import pinocchio as pin
 
         q = self._q(q)
-        pin.framesForwardKinematics(self.model, self.data, q)
-        return np.array([self.data.oMi[1].translation[:2], self.data.oMi[2].translation[:2],
-                         self.data.oMf[self.tip_frame_id].translation[:2]])
+        with self._data_lock:
+            pin.framesForwardKinematics(self.model, self.data, q)
+            return np.array([self.data.oMi[1].translation[:2], self.data.oMi[2].translation[:2],
+                             self.data.oMf[self.tip_frame_id].translation[:2]])
 
     def jacobian(self, q: Any) -> np.ndarray:
         """2x2 Jacobian d(x, y)/dq of the tip (Pinocchio frame Jacobian, LOCAL_WORLD_ALIGNED)."""
         import pinocchio as pin
 
         q = self._q(q)
-        jac = pin.computeFrameJacobian(self.model, self.data, q, self.tip_frame_id,
-                                       pin.LOCAL_WORLD_ALIGNED)
-        return np.array(jac[:2, :2])
+        with self._data_lock:
+            jac = pin.computeFrameJacobian(self.model, self.data, q, self.tip_frame_id,
+                                           pin.LOCAL_WORLD_ALIGNED)
+            return np.array(jac[:2, :2])
+
+    def with_joint_limits(self, *, velocity: Any = None, acceleration: Any = None,
+                          jerk: Any = None) -> Arm:
+        """This arm with other speed, acceleration or jerk limits (a scalar or one per joint)."""
+        limits = self.joint_limits
+
+        def per_joint(name: str, value: Any, old: Any) -> Any:
+            if value is None:
+                return old
+            arr = np.broadcast_to(np.asarray(value, dtype=float).ravel(), (2,)) \
+                if np.size(value) == 1 else np.asarray(value, dtype=float)
+            if arr.shape != (2,):
+                raise ParameterError(f"{name} limits must be one value or 2 (one per joint), "
+                                     f"got {value!r}")
+            return arr.copy()
+        new = JointLimits(limits.lower, limits.upper,
+                          per_joint("velocity", velocity, limits.velocity),
+                          per_joint("acceleration", acceleration, limits.acceleration),
+                          per_joint("jerk", jerk, limits.jerk))
+        return Arm(self.model, self.model.frames[self.tip_frame_id].name, new,
+                   self.cartesian_limits, self.name)
 
     def ik(self, xy: Any) -> np.ndarray:
         """Analytic inverse kinematics of one point (2,) or of M points (M, 2).

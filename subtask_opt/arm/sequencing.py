@@ -19,8 +19,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
 from subtask_opt.arm.configurations import penalty_for
+from subtask_opt.arm.report import TourReport, tour_report
 from subtask_opt.base.errors import (
     InputDataError,
     NoPathError,
@@ -30,7 +32,13 @@ from subtask_opt.base.errors import (
 )
 from subtask_opt.base.progress import progress_bar
 from subtask_opt.base.results import History
-from subtask_opt.base.stop import MaxGenerations, NoImprovement, StoppingCriterion, as_criteria
+from subtask_opt.base.stop import (
+    MaxGenerations,
+    NoImprovement,
+    Progress,
+    StoppingCriterion,
+    as_criteria,
+)
 from subtask_opt.ga.config import GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import run_ga
@@ -49,6 +57,8 @@ if TYPE_CHECKING:
 
 PRESETS = ("default", "paper")
 CONFIGURATION_MODES = ("fixed", "optimize")
+DEFAULT_TIME_MODEL = "joint"
+"""The time model API and CLI use by default: one the arm can execute."""
 
 
 @dataclass(frozen=True)
@@ -103,108 +113,128 @@ class SolverParams:
 
 
 @dataclass(frozen=True)
+class MatrixProblem:
+    """A tour over a travel-time matrix of your own (N x N, finite, >= 0).
+
+    Attributes:
+        matrix: the travel times (copied, read-only).
+        first: index of the node the closed tour starts and ends at (default 0).
+    """
+
+    matrix: np.ndarray
+    first: int | None = None
+
+    def __post_init__(self) -> None:
+        m = _validated_matrix(self.matrix)
+        object.__setattr__(self, "matrix", m)
+        _check_first(self.first, m.shape[0])
+
+    @property
+    def size(self) -> int:
+        return int(self.matrix.shape[0])
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether the travel times are the same both ways."""
+        return bool(np.allclose(self.matrix, self.matrix.T, rtol=1e-12, atol=0.0))
+
+    def tour_time(self, order: np.ndarray) -> float:
+        """Total time of the closed tour visiting ``order`` (validated)."""
+        order = _validated_order(order, self.size)
+        return float(np.sum(self.matrix[order, np.roll(order, -1)]))
+
+
+@dataclass(frozen=True)
 class SequencingProblem:
     """Subtasks, the arm that visits them and the time model between them.
 
     The travel-time matrix is computed once, on construction. For a matrix of
-    your own use :meth:`from_matrix`.
+    your own use :class:`MatrixProblem` (or :meth:`from_matrix`).
 
     Attributes:
         subtasks: the points to visit.
         arm: the robot (see :func:`subtask_opt.load_arm`).
-        time_model: ``"trapezoid"`` (default), ``"paper"``, ``"joint"`` or
-            ``"line"`` (see :mod:`subtask_opt.arm.timing.models`).
+        time_model: ``"joint"`` (default: times the arm can execute),
+            ``"line"``, ``"trapezoid"`` or ``"paper"`` (see
+            :mod:`subtask_opt.arm.timing`).
         first: index of the subtask the closed tour starts and ends at
             (default: the first row).
         k: via-point fraction of the paper's time model.
-        elbow: IK branch used at every subtask (0 or 1); a subtask that branch
-            cannot reach uses the other.
-        configurations: ``"fixed"`` (default) visits every subtask on the
-            ``elbow`` branch; ``"optimize"`` (``joint`` and ``line`` models)
-            lets :func:`solve` choose the order and one elbow configuration per
-            subtask together (a generalised TSP, see
-            :mod:`subtask_opt.arm.configurations`).
+        elbow: IK branch used at every subtask (0 or 1) with fixed
+            configurations; a subtask that branch cannot reach uses the other.
+        configurations: ``"optimize"`` (default for the ``joint`` and ``line``
+            models) lets :func:`solve` choose the order and one elbow
+            configuration per subtask together (a generalised TSP, see
+            :mod:`subtask_opt.arm.configurations`); ``"fixed"`` visits every
+            subtask on the ``elbow`` branch (the only choice for the Cartesian
+            models). ``None`` picks the default for the model.
         line_fallback: (``line``) what to do with a straight line the arm
             cannot follow: ``"joint"`` drives that leg as a joint move,
             ``"exclude"`` forbids it.
 
-    With ``configurations="optimize"``, :attr:`matrix` still holds the times at
-    the ``elbow`` branch; the :class:`Result` holds the matrix of the
-    configurations the solver chose, and :meth:`tour_time` decodes the best
-    configurations of the order it is given.
+    With ``configurations="optimize"``, :attr:`matrix` holds the times at the
+    ``elbow`` branch; :meth:`decode` gives the best configurations of an order.
     """
 
-    subtasks: SubtaskSet | None
-    arm: Arm | None
-    time_model: str = "trapezoid"
+    subtasks: SubtaskSet
+    arm: Arm
+    time_model: str = DEFAULT_TIME_MODEL
     first: int | None = None
     k: float = 0.1
     elbow: int = 0
-    configurations: str = "fixed"
+    configurations: str | None = None
     line_fallback: str = "joint"
-    timing: TimingResult | None = field(default=None, compare=False, repr=False)
-    _matrix: np.ndarray = field(default=None, init=False, compare=False, repr=False)  # type: ignore[assignment]
-    _symmetric: bool = field(default=False, init=False, compare=False, repr=False)
-    _neighbours: np.ndarray = field(default=None, init=False, compare=False, repr=False)  # type: ignore[assignment]
+    timing: TimingResult = field(init=False, compare=False, repr=False)
+    _matrix: np.ndarray = field(init=False, compare=False, repr=False)
     _data: np.ndarray | None = field(default=None, init=False, compare=False, repr=False)
-    _penalty: float = field(default=0.0, init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        if self.configurations not in CONFIGURATION_MODES:
+        from subtask_opt.arm.model import Arm
+        from subtask_opt.arm.tasks import SubtaskSet
+        from subtask_opt.arm.timing.models import travel_times
+
+        if isinstance(self.arm, str):
+            raise ParameterError(f"SequencingProblem.arm must be an Arm; got the name "
+                                 f"{self.arm!r}: load it with load_arm({self.arm!r})")
+        if not isinstance(self.arm, Arm):
+            raise ParameterError(f"SequencingProblem.arm must be an Arm, got "
+                                 f"{type(self.arm).__name__}")
+        if not isinstance(self.subtasks, SubtaskSet):
+            raise ParameterError(f"SequencingProblem.subtasks must be a SubtaskSet (see "
+                                 f"load_subtasks), got {type(self.subtasks).__name__}")
+        mode = self.configurations or default_configurations(self.time_model)
+        if mode not in CONFIGURATION_MODES:
             raise ParameterError(
                 f"SequencingProblem.configurations must be one of "
                 f"{', '.join(CONFIGURATION_MODES)}, got {self.configurations!r}")
-        if self.timing is None:
-            if self.subtasks is None or self.arm is None:
-                raise ParameterError(
-                    "SequencingProblem needs subtasks and an arm (or use from_matrix)")
-            from subtask_opt.arm.timing.models import travel_times
-
+        object.__setattr__(self, "configurations", mode)
+        with compiling(f"timing-{self.time_model}", "the time-model kernels"):
             timing = travel_times(self.subtasks, self.arm, self.time_model, k=self.k,
                                   elbow=self.elbow, line_fallback=self.line_fallback)
-            object.__setattr__(self, "timing", timing)
-        branch_times = self.timing.branch_times  # type: ignore[union-attr]
-        if self.configurations == "optimize":
-            if branch_times is None:
+        object.__setattr__(self, "timing", timing)
+        if mode == "optimize":
+            if timing.branch_times is None:
                 raise ParameterError(
                     f"SequencingProblem.configurations='optimize' needs the joint or line time "
                     f"model (the {self.time_model!r} model does not time elbow changes)")
             from subtask_opt.arm.configurations import pack_data
 
-            data, penalty = pack_data(branch_times)
+            data, _ = pack_data(timing.branch_times)
             object.__setattr__(self, "_data", data)
-            object.__setattr__(self, "_penalty", penalty)
         # Legs the line model excludes are the only infinite times allowed.
-        excluded = (np.isinf(self.timing.matrix)  # type: ignore[union-attr]
-                    if getattr(self.timing, "line_fallback", "joint") == "exclude"
-                    and self.time_model == "line" else None)
-        matrix = _validated_matrix(self.timing.matrix, allow_inf=excluded)  # type: ignore[union-attr]
-        object.__setattr__(self, "_matrix", matrix)
-        object.__setattr__(self, "_symmetric",
-                           bool(np.allclose(matrix, matrix.T, rtol=1e-12, atol=0.0)))
-        object.__setattr__(self, "_neighbours", neighbour_table(matrix))
-        n = matrix.shape[0]
-        if self.first is not None and (
-                isinstance(self.first, bool) or not isinstance(self.first, (int, np.integer))
-                or not 0 <= self.first < n):
-            raise ParameterError(
-                f"SequencingProblem.first must be a subtask index in [0, {n - 1}], "
-                f"got {self.first!r}")
+        excluded = (np.isinf(timing.matrix)
+                    if self.line_fallback == "exclude" and self.time_model == "line" else None)
+        object.__setattr__(self, "_matrix", _validated_matrix(timing.matrix, allow_inf=excluded))
+        _check_first(self.first, self.size)
 
-    @classmethod
-    def from_matrix(cls, matrix: np.ndarray, *, first: int | None = None) -> SequencingProblem:
-        """A problem over a travel-time matrix of your own (N x N, finite, >= 0)."""
-        from subtask_opt.arm.timing.models import TimingResult
-
-        m = _validated_matrix(matrix)
-        timing = TimingResult(matrix=m, model="custom",
-                              configurations=np.zeros(m.shape[0], dtype=np.int64),
-                              leg_check=None)
-        return cls(subtasks=None, arm=None, time_model="custom", first=first, timing=timing)
+    @staticmethod
+    def from_matrix(matrix: np.ndarray, *, first: int | None = None) -> MatrixProblem:
+        """A problem over a travel-time matrix of your own: a :class:`MatrixProblem`."""
+        return MatrixProblem(matrix, first=first)
 
     @property
     def matrix(self) -> np.ndarray:
-        """The N x N travel times the solver minimises over (read-only)."""
+        """The N x N travel times at the fixed configurations (read-only)."""
         return self._matrix
 
     @property
@@ -214,12 +244,18 @@ class SequencingProblem:
     @property
     def symmetric(self) -> bool:
         """Whether the travel times are the same both ways (all built-in models)."""
-        return self._symmetric
+        return bool(np.allclose(self._matrix, self._matrix.T, rtol=1e-12, atol=0.0))
 
     @property
     def optimizes_configurations(self) -> bool:
         """Whether :func:`solve` chooses the elbow configurations."""
         return self._data is not None
+
+    def configured_data(self) -> np.ndarray:
+        """The per-configuration leg times the GA decodes (``configurations="optimize"``)."""
+        if self._data is None:
+            raise ParameterError("this problem has fixed configurations")
+        return self._data
 
     def tour_time(self, order: np.ndarray) -> float:
         """Total time of the closed tour visiting ``order`` (validated).
@@ -227,10 +263,7 @@ class SequencingProblem:
         With ``configurations="optimize"``: the time with the best
         configurations for that order (see :meth:`decode`).
         """
-        order = _validated_order(order, self.size)
-        if self.optimizes_configurations:
-            return self.decode(order)[0]
-        return float(np.sum(self._matrix[order, np.roll(order, -1)]))
+        return self.decode(order)[0]
 
     def decode(self, order: np.ndarray) -> tuple[float, np.ndarray]:
         """``(tour time, configurations)``: the best elbow configurations for ``order``.
@@ -239,35 +272,33 @@ class SequencingProblem:
         """
         order = _validated_order(order, self.size)
         if not self.optimizes_configurations:
-            return self.tour_time(order), np.asarray(self.timing.configurations)  # type: ignore[union-attr]
+            return (float(np.sum(self._matrix[order, np.roll(order, -1)])),
+                    np.asarray(self.timing.configurations))
         from subtask_opt.arm.configurations import best_configurations
 
-        return best_configurations(order, self.timing.branch_times)  # type: ignore[union-attr]
+        assert self.timing.branch_times is not None
+        return best_configurations(order, self.timing.branch_times)
 
 
 @dataclass(frozen=True)
 class Result:
-    """The answer of :func:`solve`.
+    """The answer of :func:`solve`: the tour and the facts of the search.
 
     Attributes:
-        order: 0-based subtask indices of the closed tour, starting at the
-            problem's ``first`` subtask (or subtask 0).
+        order: 0-based indices of the closed tour, starting at the problem's
+            ``first`` node (or node 0).
         total_time: time of the closed tour (seconds under the time model).
         leg_times: ``leg_times[i]`` is the time from ``order[i]`` to
             ``order[(i + 1) % N]``.
-        matrix: the N x N travel times that were optimised.
+        matrix: the N x N travel times of the answer (for an arm problem that
+            optimises configurations: at the configurations chosen).
         generations, restarts: what the micro-GA did.
-        runtime_s: wall time of the search (JIT compile excluded once warm).
+        runtime_s: wall time of the search (compilation never included).
         seed: the seed that reproduces this result.
         history: best and mean cost per generation, restart generations.
-        preset, time_model, robot: what was solved and how.
-        configurations: the IK branch used at each subtask (by index).
-        infeasible_legs: the joint-limit check of the straight-line legs for
-            the Cartesian models; for the ``line`` model, the tour's legs whose
-            straight line is infeasible (``None`` for the joint model).
-        leg_moves: how each leg is driven: ``"line"`` (straight line) or
-            ``"joint"`` (joint-space move); None for a custom matrix.
-        configurations_mode: ``"fixed"`` or ``"optimize"`` (chosen by the solver).
+        preset: the solver preset.
+        report: for an arm problem, what the tour means for the arm
+            (:class:`~subtask_opt.arm.report.TourReport`); None for a matrix.
     """
 
     order: np.ndarray
@@ -280,36 +311,28 @@ class Result:
     seed: int
     history: History
     preset: str
-    time_model: str
-    robot: str
-    configurations: np.ndarray
-    infeasible_legs: dict[str, Any] | None = None
-    leg_moves: tuple[str, ...] | None = None
-    configurations_mode: str = "fixed"
-
-    @property
-    def configuration_changes(self) -> int:
-        """Legs whose two ends use different elbow configurations."""
-        c = self.configurations[self.order]
-        return int(np.sum(c != np.roll(c, -1)))
+    report: TourReport | None = None
 
     def summary(self) -> str:
         """A few lines for a terminal."""
-        lines = [
-            f"{len(self.order)} subtasks, {self.time_model} time model, robot {self.robot}",
+        lines = []
+        if self.report is not None:
+            lines.append(f"{len(self.order)} subtasks, {self.report.time_model} time model, "
+                         f"robot {self.report.robot}")
+        lines += [
             f"total time {self.total_time:.4f} s  ({self.preset} preset, seed {self.seed}, "
             f"{self.generations} generations, {self.restarts} restarts, "
             f"{self.runtime_s * 1e3:.2f} ms)",
             "order: " + " ".join(str(int(i)) for i in self.order),
         ]
-        if self.configurations_mode == "optimize":
-            c = self.configurations[self.order]
+        if self.report is not None and self.report.configurations_mode == "optimize":
+            c = self.report.configurations[self.order]
             lines.append("elbow: " + " ".join("du"[int(b)] for b in c)
-                         + f"  (d down, u up; {self.configuration_changes} changes)")
+                         + f"  (d down, u up; {self.report.configuration_changes} changes)")
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (the CLI's ``--json``)."""
+        """JSON-ready dict (the CLI's ``--json``); the arm's view under ``"report"``."""
         return {
             "order": [int(i) for i in self.order],
             "total_time": self.total_time,
@@ -320,48 +343,49 @@ class Result:
             "runtime_s": self.runtime_s,
             "seed": self.seed,
             "preset": self.preset,
-            "time_model": self.time_model,
-            "robot": self.robot,
-            "configurations": [int(c) for c in self.configurations],
-            "configurations_mode": self.configurations_mode,
-            "leg_moves": None if self.leg_moves is None else list(self.leg_moves),
-            "infeasible_legs": self.infeasible_legs,
             "history": self.history.to_dict(),
+            "report": None if self.report is None else self.report.to_dict(),
         }
 
 
-def solve(problem: SequencingProblem, *, seed: int = 0,
+def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
           stop: StoppingCriterion | list[StoppingCriterion] | None = None,
           params: SolverParams | None = None, progress: bool = False) -> Result:
-    """Find a minimum-time closed tour through the problem's subtasks.
+    """Find a minimum-time closed tour through the problem's subtasks (or nodes).
 
     Args:
-        problem: what to solve.
-        seed: random seed; the same seed gives the same result.
+        problem: what to solve (an arm problem or a matrix problem).
+        seed: random seed in [0, 2**63); the same seed gives the same result.
         stop: one stopping criterion or a list (any of them stops the run);
             default: ``params.default_stop()``.
         params: solver parameters (default: ``SolverParams()``).
-        progress: show a progress bar on stderr for runs over a second.
+        progress: show a progress bar on stderr (a terminal only) for runs over a second.
     """
-    if not isinstance(problem, SequencingProblem):
-        raise ParameterError(f"solve needs a SequencingProblem, got {type(problem).__name__}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ParameterError(f"seed must be an integer >= 0, got {seed!r}")
-    params = params or SolverParams()
+    if not isinstance(problem, (SequencingProblem, MatrixProblem)):
+        raise ParameterError(f"solve needs a SequencingProblem or MatrixProblem, got "
+                             f"{type(problem).__name__}")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
+            0 <= seed < 2**63):
+        raise ParameterError(f"seed must be an integer in [0, 2**63), got {seed!r}")
+    if params is None:
+        params = SolverParams()
+    elif not isinstance(params, SolverParams):
+        raise ParameterError(f"solve: params must be a SolverParams, got {params!r}")
     criteria = as_criteria(stop, params.default_stop())
     matrix = problem.matrix
     n = problem.size
     paper = params.preset == "paper"
-    configured = problem.optimizes_configurations
+    configured = isinstance(problem, SequencingProblem) and problem.optimizes_configurations
     if configured:
-        data = problem._data
+        assert isinstance(problem, SequencingProblem)
+        data = problem.configured_data()
         kind = Kind.CONFIGURED_PERMUTATION
         search = SEARCH_PAPER if paper else SEARCH_FAST
         neighbours = neighbour_table(data[:, :n])
     else:
         # a GA tour may not use an excluded leg: a finite penalty keeps the costs comparable
         data = np.where(np.isfinite(matrix), matrix, penalty_for(matrix))
-        neighbours = problem._neighbours
+        neighbours = neighbour_table(matrix)
         kind = Kind.PERMUTATION
         if paper:
             search = SEARCH_PAPER
@@ -377,22 +401,23 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
     with progress_bar(progress, total=total, desc="micro-GA", unit="gen") as bar:
         done = [0]
 
-        def on_chunk(p) -> None:
+        def on_chunk(p: Progress) -> None:
             bar.update(p.generation - done[0])
             done[0] = p.generation
             bar.set_postfix_str(f"best {p.best_cost:.4f}")
 
         outcome = run_ga(kind, config, data, aux, max_genes=n, seed=int(seed),
                          criteria=criteria, on_chunk=on_chunk)
-    order = _rotate(outcome.genes, problem.first if problem.first is not None else 0)
-    timing = problem.timing
-    configs = np.asarray(timing.configurations)  # type: ignore[union-attr]
-    if configured:
-        from subtask_opt.arm.configurations import induced_matrix
-
+    first = problem.first if problem.first is not None else 0
+    order = _rotate(outcome.genes, first)
+    report = None
+    if isinstance(problem, SequencingProblem):
         _, configs = problem.decode(order)
-        matrix = induced_matrix(timing.branch_times, configs)  # type: ignore[union-attr]
-        matrix.setflags(write=False)
+        if configured:
+            from subtask_opt.arm.configurations import induced_matrix
+
+            matrix = induced_matrix(problem.timing.branch_times, configs)
+            matrix.setflags(write=False)
     legs = matrix[order, np.roll(order, -1)]
     if not np.all(np.isfinite(legs)):
         k = int(np.flatnonzero(~np.isfinite(legs))[0])
@@ -400,16 +425,8 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
             f"no closed tour avoids the excluded straight lines (the best one needs the "
             f"impossible line {order[k]} -> {order[(k + 1) % n]}); use line_fallback='joint' "
             "to drive such legs as joint moves")
-    leg_moves = None
-    moves = timing.moves(configs)  # type: ignore[union-attr]
-    if moves is not None:
-        names = {0: "joint", 1: "line"}
-        leg_moves = tuple(names[int(m)] for m in moves[order, np.roll(order, -1)])
-    if problem.time_model == "line":
-        infeasible = timing.line_summary(order, configs)  # type: ignore[union-attr]
-    else:
-        leg_check = getattr(timing, "leg_check", None)
-        infeasible = leg_check.to_dict() if leg_check is not None else None
+    if isinstance(problem, SequencingProblem):
+        report = tour_report(problem, order, configs, legs)
     return Result(
         order=order,
         total_time=float(np.sum(legs)),
@@ -421,12 +438,7 @@ def solve(problem: SequencingProblem, *, seed: int = 0,
         seed=int(seed),
         history=outcome.history,
         preset=params.preset,
-        time_model=problem.time_model,
-        robot=problem.arm.name if problem.arm is not None else "custom",
-        configurations=configs,
-        infeasible_legs=infeasible,
-        leg_moves=leg_moves,
-        configurations_mode="optimize" if configured else "fixed",
+        report=report,
     )
 
 
@@ -452,6 +464,17 @@ def _validated_matrix(matrix: np.ndarray, allow_inf: np.ndarray | None = None) -
         raise InputDataError(f"travel time from subtask {i} to {j} is negative ({m[i, j]})")
     m.setflags(write=False)
     return m
+
+
+def _check_first(first: object, n: int) -> None:
+    if first is not None and (isinstance(first, bool) or not isinstance(first, (int, np.integer))
+                              or not 0 <= first < n):
+        raise ParameterError(f"first must be an index in [0, {n - 1}], got {first!r}")
+
+
+def default_configurations(time_model: str) -> str:
+    """The configuration mode a time model gets by default (API and CLI alike)."""
+    return "optimize" if time_model in ("joint", "line") else "fixed"
 
 
 def _validated_order(order: np.ndarray, n: int) -> np.ndarray:

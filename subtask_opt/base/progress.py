@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import sys
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 
@@ -29,3 +33,31 @@ def progress_bar(enabled: bool, *, total: int | None = None, desc: str = "",
 
     return tqdm(total=total, desc=desc, unit=unit, delay=1.0, file=sys.stderr, leave=False,
                 dynamic_ncols=True)
+
+
+@contextmanager
+def elapsed_ticker(desc: str, *, interval: float = 0.5) -> Iterator[None]:
+    """On a terminal, a bar showing the seconds spent in the block (for waits
+    with no known length, such as a JIT compile); nothing elsewhere."""
+    if not sys.stderr.isatty():
+        yield
+        return
+    from tqdm.auto import tqdm
+
+    stop = threading.Event()
+    bar = tqdm(desc=desc, bar_format="{desc}: {elapsed}", file=sys.stderr, leave=False)
+
+    def tick() -> None:
+        while not stop.wait(interval):
+            bar.refresh()
+
+    thread = threading.Thread(target=tick, daemon=True)
+    start = time.perf_counter()
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        bar.close()
+        _ = time.perf_counter() - start

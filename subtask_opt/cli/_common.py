@@ -49,6 +49,51 @@ def seed(text: str) -> int:
     return value
 
 
+def int_in(low: int, high: int) -> Any:
+    """An argparse type: a whole number in [low, high]."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected a whole number in [{low}, {high}], "
+                                             f"got {text!r}")
+        return value
+    parse.__name__ = "int"
+    return parse
+
+
+def float_in(low: float, high: float, *, open_low: bool = False) -> Any:
+    """An argparse type: a finite number in [low, high] (or (low, high] with ``open_low``)."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        ok = math.isfinite(value) and (value > low if open_low else value >= low) \
+            and value <= high
+        if not ok:
+            bracket = "(" if open_low else "["
+            raise argparse.ArgumentTypeError(f"expected a number in {bracket}{low:g}, {high:g}], "
+                                             f"got {text!r}")
+        return value
+    parse.__name__ = "float"
+    return parse
+
+
+def floats(text: str) -> tuple[float, ...]:
+    """One or more comma-separated finite numbers > 0 (a scalar or one per joint)."""
+    try:
+        values = tuple(float(t) for t in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers like 1.5 or 1.5,2, got {text!r}") \
+            from None
+    if not all(math.isfinite(v) and 0 < v < 1e9 for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite numbers in (0, 1e9), got {text!r}")
+    return values
+
+
 def _output(text: str, suffixes: tuple[str, ...] | None) -> str:
     if not text.strip():
         raise argparse.ArgumentTypeError("the output path is empty")

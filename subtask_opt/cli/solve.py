@@ -1,39 +1,62 @@
-"""``subtask-opt solve``: order the subtasks of a planar arm for minimum time."""
+"""``subtask-opt solve``: order the subtasks of an arm for minimum time."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
-import numpy as np
+from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
+from subtask_opt.cli._common import (
+    EXIT_FAILED,
+    EXIT_OK,
+    add_no_progress,
+    add_outputs,
+    animation_output,
+    float_in,
+    floats,
+    int_in,
+    json_output,
+    non_negative_int,
+    refuse_overwriting_inputs,
+    seed,
+    write_json,
+)
 
-from subtask_opt.cli._common import non_negative_int, positive_float, positive_int, write_json
+MAX_GENERATIONS = 10_000_000
+MAX_STALL = 1_000_000
+MAX_RUNTIME_S = 86_400.0
 
 
 def register(root: argparse._SubParsersAction) -> None:
     """Add the ``solve`` command."""
+    from subtask_opt.arm.sequencing import CONFIGURATION_MODES, DEFAULT_TIME_MODEL, PRESETS
+    from subtask_opt.arm.timing import TIME_MODELS
+
     p = root.add_parser(
         "solve",
         help="order subtasks for minimum total travel time",
-        description="Find the order of subtasks that minimises the arm's total travel time "
-                    "(closed tour), print it with a per-leg table, optionally write JSON "
-                    "and figures.",
+        description="Find the order of subtasks (and the elbow configuration at each) that "
+                    "minimises the arm's total travel time (closed tour); print it with a "
+                    "per-leg table, optionally write JSON, figures and the executed trajectory.",
     )
     p.add_argument("--case", required=True, metavar="square20|random30|PATH",
                    help="built-in case or a CSV (header x,y[,theta]) / JSON file of subtasks")
-    p.add_argument("--case-seed", type=non_negative_int, default=0, metavar="N",
+    p.add_argument("--case-seed", type=seed, default=0, metavar="N",
                    help="seed of the random30 generator (default 0)")
     p.add_argument("--robot", default="planar_2r", metavar="planar_2r|asr_twodof|PATH.urdf",
                    help="robot model (default planar_2r)")
-    p.add_argument("--time-model", default="trapezoid", metavar="MODEL",
-                   help="paper | trapezoid | joint | line (default trapezoid)")
-    p.add_argument("--k", type=float, default=0.1,
-                   help="via-point fraction of the paper time model (default 0.1)")
+    p.add_argument("--time-model", default=DEFAULT_TIME_MODEL, choices=TIME_MODELS,
+                   help=f"time model (default {DEFAULT_TIME_MODEL}: times the arm can execute; "
+                        "paper and trapezoid are Cartesian models that may promise legs the "
+                        "arm cannot drive)")
+    p.add_argument("--k", type=float_in(0.0, 0.5), default=0.1,
+                   help="via-point fraction of the paper time model, in [0, 0.5] (default 0.1)")
     p.add_argument("--elbow", type=int, default=0, choices=(0, 1),
                    help="IK branch used at every subtask with --configurations fixed "
                         "(0 elbow-down, 1 elbow-up; default 0)")
-    p.add_argument("--configurations", choices=("optimize", "fixed"), default=None,
+    p.add_argument("--configurations", choices=CONFIGURATION_MODES, default=None,
                    help="choose the elbow configuration of each subtask with the order "
                         "(default for joint and line) or keep --elbow (default otherwise)")
     p.add_argument("--line-fallback", choices=("joint", "exclude"), default="joint",
@@ -41,35 +64,39 @@ def register(root: argparse._SubParsersAction) -> None:
                         "(default) or forbid it")
     p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
                    help="index of the subtask the tour starts and ends at")
-    p.add_argument("--preset", default="default", choices=("default", "paper"),
+    p.add_argument("--preset", default="default", choices=PRESETS,
                    help="solver preset (default: micro-GA with local search)")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="solver seed (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="solver seed in [0, 2**63) (default 0)")
+    limits = p.add_argument_group("joint limits (replace the robot's; a scalar or one per joint)")
+    limits.add_argument("--vmax", type=floats, metavar="V[,V]", help="joint speed limits, rad/s")
+    limits.add_argument("--amax", type=floats, metavar="A[,A]",
+                        help="joint acceleration limits, rad/s^2")
+    limits.add_argument("--jmax", type=floats, metavar="J[,J]", help="joint jerk limits, rad/s^3")
     stop = p.add_argument_group("stopping (any criterion given stops the run)")
-    stop.add_argument("--max-generations", type=positive_int, metavar="N")
-    stop.add_argument("--max-runtime", type=positive_float, metavar="SECONDS")
-    stop.add_argument("--no-improvement", type=positive_int, metavar="N",
-                      help="stop after N generations without a better tour")
-    stop.add_argument("--target", type=float, metavar="SECONDS",
+    stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
+                      help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
+    stop.add_argument("--max-runtime", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
+                      metavar="SECONDS", help=f"at most this long, in (0, {MAX_RUNTIME_S:g}]")
+    stop.add_argument("--no-improvement", type=int_in(1, MAX_STALL), metavar="N",
+                      help=f"stop after N generations without a better tour, N in [1, {MAX_STALL}]")
+    stop.add_argument("--target", type=float_in(0.0, 1e12), metavar="SECONDS",
                       help="stop once the total time is at most this")
     out = p.add_argument_group("output")
-    out.add_argument("--json", metavar="OUT.json", help="write the result as JSON")
-    out.add_argument("--plot", metavar="OUT.png",
-                     help="write the tour over the workspace and the convergence plot")
-    out.add_argument("--trajectory", metavar="OUT.csv",
+    add_outputs(out, plot="the tour over the workspace and the convergence plot")
+    out.add_argument("--trajectory", metavar="OUT.csv", type=json_output,
                      help="write the executed joint trajectory (t,q1,q2,dq1,dq2,x,y), "
                           "checked against the joint limits")
-    out.add_argument("--dt", type=float, default=0.01, metavar="SECONDS",
-                     help="sampling step of --trajectory (default 0.01)")
-    out.add_argument("--animate", metavar="OUT.gif",
+    out.add_argument("--dt", type=float_in(1e-4, 1.0), default=0.01, metavar="SECONDS",
+                     help="sampling step of --trajectory, in [1e-4, 1] (default 0.01)")
+    out.add_argument("--animate", metavar="OUT.gif", type=animation_output,
                      help="write a GIF of the arm executing the tour")
-    out.add_argument("--quiet", action="store_true", help="print only the summary")
+    out.add_argument("--quiet", action="store_true", help="print only the summary (no leg table)")
+    add_no_progress(out)
     p.set_defaults(handler=run)
 
 
-def _stop_criteria(args: argparse.Namespace) -> list | None:
-    from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
-
-    criteria: list = []
+def _stop_criteria(args: argparse.Namespace) -> list[Any] | None:
+    criteria: list[Any] = []
     if args.max_generations is not None:
         criteria.append(MaxGenerations(args.max_generations))
     if args.max_runtime is not None:
@@ -85,43 +112,48 @@ def run(args: argparse.Namespace) -> int:
     from subtask_opt.arm.model import load_arm
     from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
     from subtask_opt.arm.tasks import CASE_NAMES, builtin_case, load_subtasks
-    from subtask_opt.base.errors import InputDataError, require_positive
 
-    # fail before the search, not after
-    if args.trajectory or args.animate:
-        require_positive("solve", "dt", args.dt)
-    if args.animate and not args.animate.lower().endswith(".gif"):
-        raise InputDataError(f"animation file must end in .gif, got {args.animate!r}")
+    refuse_overwriting_inputs([args.case, args.robot],
+                              [args.json, args.plot, args.trajectory, args.animate])
     arm = load_arm(args.robot)
+    if args.vmax or args.amax or args.jmax:
+        arm = arm.with_joint_limits(velocity=args.vmax, acceleration=args.amax, jerk=args.jmax)
     if args.case in CASE_NAMES:
         subtasks = builtin_case(args.case, arm, seed=args.case_seed)
     else:
         subtasks = load_subtasks(Path(args.case))
-    configurations = args.configurations or (
-        "optimize" if args.time_model in ("joint", "line") else "fixed")
     problem = SequencingProblem(subtasks, arm, time_model=args.time_model, first=args.first,
-                                k=args.k, elbow=args.elbow, configurations=configurations,
+                                k=args.k, elbow=args.elbow, configurations=args.configurations,
                                 line_fallback=args.line_fallback)
     stop = _stop_criteria(args)
-    if stop is not None and all(type(c).__name__ == "TargetCost" for c in stop):
-        stop = stop + SolverParams(preset=args.preset).default_stop()
-    result = solve(problem, seed=args.seed, stop=stop, params=SolverParams(preset=args.preset),
-                   progress=sys.stderr.isatty())
+    params = SolverParams(preset=args.preset)
+    if stop is not None and all(isinstance(c, TargetCost) for c in stop):
+        stop = stop + params.default_stop()
+    result = solve(problem, seed=args.seed, stop=stop, params=params,
+                   progress=not args.no_progress)
+    report = result.report
+    assert report is not None
     print(result.summary())
     if not args.quiet:
-        print(format_leg_table(result, problem))
-    _warn_infeasible(result, problem)
-    trajectory, report = (_executed(args, problem, result) if args.trajectory or args.animate
-                          else (None, None))
+        print(report.leg_table())
+    warning = report.warning()
+    if warning:
+        print(f"warning: {warning}", file=sys.stderr)
+    executed = None
+    if args.trajectory or args.animate:
+        executed = _executed(args, problem, result)
+        if executed is None:
+            return EXIT_FAILED
     if args.json:
         payload = result.to_dict()
         payload["case"] = args.case
         payload["points"] = problem.subtasks.points.tolist()
-        if trajectory is not None:
+        if executed is not None:
+            trajectory, check = executed
             payload["trajectory"] = {
-                "duration": trajectory.duration, "valid": report.ok,
-                "max_velocity_ratio": max(report.max_velocity_ratio),
-                "max_acceleration_ratio": max(report.max_acceleration_ratio),
+                "duration": trajectory.duration, "valid": check.ok,
+                "max_velocity_ratio": max(check.max_velocity_ratio),
+                "max_acceleration_ratio": max(check.max_acceleration_ratio),
                 "legs": [leg.kind for leg in trajectory.legs]}
         write_json(args.json, payload)
         print(f"wrote {args.json}")
@@ -130,88 +162,36 @@ def run(args: argparse.Namespace) -> int:
 
         save_solution_figure(result, problem, args.plot)
         print(f"wrote {args.plot}")
-    if trajectory is not None:
-        _write_trajectory(args, problem, trajectory)
-    return 0
+    if executed is not None:
+        _write_trajectory(args, problem, executed[0])
+    return EXIT_OK
 
 
-def _executed(args: argparse.Namespace, problem, result):
-    """The tour's trajectory, validated (an invalid one is an error, never written)."""
+def _executed(args: argparse.Namespace, problem: Any, result: Any) -> Any:
+    """The tour's trajectory and its check; None (after one line) when it is invalid."""
     from subtask_opt.arm.trajectory import tour_trajectory, validate_trajectory
-    from subtask_opt.base.errors import SubtaskOptError
 
     trajectory = tour_trajectory(problem, result)
-    report = validate_trajectory(trajectory, dt=min(args.dt, 1e-3))
-    print(report.summary())
-    if not report.ok:
-        raise SubtaskOptError("executed trajectory breaks a joint limit: "
-                              + "; ".join(report.violations))
+    check = validate_trajectory(trajectory, dt=min(args.dt, 1e-3))
+    print(check.summary())
+    if not check.ok:
+        print("subtask-opt: failed: the executed trajectory breaks a limit: "
+              + "; ".join(check.violations), file=sys.stderr)
+        return None
     if problem.time_model in ("paper", "trapezoid"):
         print(f"note: the {problem.time_model} model promised {result.total_time:.4f} s; "
               f"driving its straight lines within the joint limits takes "
               f"{trajectory.duration:.4f} s")
-    return trajectory, report
+    return trajectory, check
 
 
-def _write_trajectory(args: argparse.Namespace, problem, trajectory) -> None:
+def _write_trajectory(args: argparse.Namespace, problem: Any, trajectory: Any) -> None:
     if args.trajectory:
         trajectory.to_csv(args.trajectory, args.dt)
         print(f"wrote {args.trajectory}")
     if args.animate:
         from subtask_opt.plotting.trajectory import animate_tour
 
-        animate_tour(problem, trajectory, args.animate, progress=sys.stderr.isatty())
+        animate_tour(problem, trajectory, args.animate,
+                     progress=not args.no_progress and sys.stderr.isatty())
         print(f"wrote {args.animate}")
-
-
-def format_leg_table(result, problem) -> str:
-    """One row per leg: from, to, elbow branches, distance, time, move, and notes.
-
-    The notes give the joint-limit check of the Cartesian models' straight
-    lines, and for the line model why a leg is not a straight line.
-    """
-    pts = problem.subtasks.points
-    timing = problem.timing
-    check = timing.leg_check
-    configs = result.configurations
-    rows = [f"{'leg':>4} {'from':>5} {'to':>5} {'elbow':>6} {'dist [m]':>9} {'time [s]':>9} "
-            f"{'move':>5}  notes"]
-    n = len(result.order)
-    for i in range(n):
-        a, b = int(result.order[i]), int(result.order[(i + 1) % n])
-        ca, cb = int(configs[a]), int(configs[b])
-        dist = float(((pts[a] - pts[b]) ** 2).sum() ** 0.5)
-        elbow = "du"[ca] + ("->" + "du"[cb] if ca != cb else "")
-        move = result.leg_moves[i] if result.leg_moves is not None else "line"
-        notes = []
-        if ca != cb:
-            notes.append("elbow change")
-        if check is not None:
-            if check.outside_annulus[a, b]:
-                notes.append("straight line impossible (inner disc, joint limit or elbow change)")
-            elif check.speed_ratio[a, b] > 1.0:
-                notes.append(f"joint speed x{check.speed_ratio[a, b]:.2f} over limit")
-        why = timing.line_failure(a, b, ca, cb) if problem.time_model == "line" else None
-        if why is not None and ca == cb:
-            notes.append(f"line infeasible ({why})")
-        rows.append(f"{i:>4} {a:>5} {b:>5} {elbow:>6} {dist:>9.4f} {result.leg_times[i]:>9.4f} "
-                    f"{move:>5}  {', '.join(notes)}")
-    return "\n".join(rows)
-
-
-def _warn_infeasible(result, problem) -> None:
-    """Warn when the tour's straight lines would break the arm's joint limits."""
-    check = problem.timing.leg_check
-    if check is None:
-        return
-    order = result.order
-    nxt = np.roll(order, -1)
-    impossible = int(np.count_nonzero(check.outside_annulus[order, nxt]))
-    over = check.speed_ratio[order, nxt]
-    fast = int(np.count_nonzero((over > 1.0) & ~check.outside_annulus[order, nxt]))
-    if impossible or fast:
-        worst = float(np.max(np.where(np.isfinite(over), over, 0.0)))
-        print(f"warning: {impossible + fast} of the tour's {len(order)} straight-line legs break "
-              f"a joint limit ({impossible} impossible as a straight line, {fast} over a joint "
-              f"speed limit, worst x{worst:.2f}); use --time-model joint or line for times the "
-              "arm can achieve", file=sys.stderr)

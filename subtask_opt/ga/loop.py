@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from subtask_opt._kernel_cache import compiling
 from subtask_opt.base.errors import ParameterError, require_int
 from subtask_opt.base.results import History
 from subtask_opt.base.stop import (
@@ -243,8 +244,9 @@ def run_ga(
     counters = np.zeros(4, dtype=np.int64)
     stall_limit, target = kernel_limits(criteria)
     code = tag(kind)  # its type selects the kind's compiled loop
-    evolve(code, pop, lengths, costs, best, best_cost, counters, data, aux, params, rng, 0,
-           stall_limit, target, np.empty(0), np.empty(0), np.empty(0, dtype=np.int64))
+    with compiling(f"ga-{kind.name.lower()}", "the genetic algorithm"):  # before the clock
+        evolve(code, pop, lengths, costs, best, best_cost, counters, data, aux, params, rng, 0,
+               stall_limit, target, np.empty(0), np.empty(0), np.empty(0, dtype=np.int64))
 
     start = time.perf_counter()
     hist_best: list[np.ndarray] = []

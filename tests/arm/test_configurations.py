@@ -69,21 +69,24 @@ def test_decode_equals_brute_force_over_configurations(n: int, seed: int, dead: 
 @pytest.mark.parametrize("seed", range(3))
 def test_ga_equals_brute_force_on_random_tensors(seed: int) -> None:
     t = _random_tensor(np.random.default_rng(seed), 8, p_inf=0.2)
-    problem = _problem_from_tensor(t)
-    result = solve(problem, seed=seed)
-    assert result.total_time == pytest.approx(_brute_force(t), rel=1e-12)
+    assert _ga_on_tensor(t, seed) == pytest.approx(_brute_force(t), rel=1e-12)
 
 
-def _problem_from_tensor(t: np.ndarray) -> SequencingProblem:
-    from subtask_opt.arm.timing.models import MOVE_JOINT, TimingResult
+def _ga_on_tensor(t: np.ndarray, seed: int) -> float:
+    """The configured-permutation GA run directly on a branch-time tensor."""
+    from subtask_opt.base.stop import MaxGenerations, NoImprovement
+    from subtask_opt.ga.config import GAConfig
+    from subtask_opt.ga.kinds import Kind
+    from subtask_opt.ga.loop import run_ga
+    from subtask_opt.ga.permutation import SEARCH_FAST, make_aux, neighbour_table
 
     n = t.shape[0]
-    configs = np.zeros(n, dtype=np.int64)
-    timing = TimingResult(matrix=induced_matrix(t, configs), model="joint",
-                          configurations=configs, branch_times=t,
-                          branch_moves=np.full(t.shape, MOVE_JOINT, dtype=np.int8))
-    return SequencingProblem(None, None, time_model="joint", configurations="optimize",
-                             timing=timing)
+    data, _ = pack_data(t)
+    aux = make_aux(neighbour_table(data[:, :n]), nearest_fallback=True, search=SEARCH_FAST)
+    out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
+                 criteria=[NoImprovement(15), MaxGenerations(50_000)])
+    cost, _ = best_configurations(out.genes, t)
+    return cost
 
 
 @pytest.mark.parametrize(("robot", "model", "n", "seed"), [
@@ -99,25 +102,27 @@ def test_joint_aware_solution_equals_brute_force(robot: str, model: str, n: int,
     assert result.total_time == pytest.approx(_brute_force(problem.timing.branch_times),
                                               rel=1e-12)
     # the answer is consistent: configurations reach their subtasks, legs add up
-    q = problem.timing.branch_joints[np.arange(n), result.configurations]
+    configs = result.report.configurations
+    q = problem.timing.branch_joints[np.arange(n), configs]
     assert np.isfinite(q).all()
     np.testing.assert_allclose(result.leg_times,
                                result.matrix[result.order, np.roll(result.order, -1)])
     assert result.total_time == pytest.approx(result.leg_times.sum())
     assert result.total_time == pytest.approx(problem.tour_time(result.order))
-    d = result.to_dict()
-    assert d["configurations"] == result.configurations.tolist()
+    d = result.to_dict()["report"]
+    assert d["configurations"] == configs.tolist()
     assert d["configurations_mode"] == "optimize" and len(d["leg_moves"]) == n
 
 
 def test_optimizing_is_never_worse_than_a_fixed_branch() -> None:
     arm = _arm("planar_2r")
     s = random_subtasks(arm, 20, seed=4)
-    fixed = solve(SequencingProblem(s, arm, time_model="joint"), seed=0)
+    fixed = solve(SequencingProblem(s, arm, time_model="joint", configurations="fixed"), seed=0)
     free = solve(SequencingProblem(s, arm, time_model="joint", configurations="optimize"),
                  seed=0)
     assert free.total_time <= fixed.total_time * (1 + 1e-12)
-    assert free.configurations_mode == "optimize" and fixed.configurations_mode == "fixed"
+    assert free.report.configurations_mode == "optimize"
+    assert fixed.report.configurations_mode == "fixed"
 
 
 def test_same_seed_same_configured_result() -> None:
@@ -128,7 +133,7 @@ def test_same_seed_same_configured_result() -> None:
         a = solve(problem, seed=5, params=params, stop=MaxGenerations(60))
         b = solve(problem, seed=5, params=params, stop=MaxGenerations(60))
         np.testing.assert_array_equal(a.order, b.order)
-        np.testing.assert_array_equal(a.configurations, b.configurations)
+        np.testing.assert_array_equal(a.report.configurations, b.report.configurations)
         np.testing.assert_array_equal(a.history.best_cost, b.history.best_cost)
 
 
@@ -140,7 +145,7 @@ def test_a_subtask_with_one_configuration_gets_it() -> None:
     problem = SequencingProblem(SubtaskSet(pts), arm, time_model="joint",
                                 configurations="optimize")
     result = solve(problem, seed=0)
-    assert result.configurations[0] == 1
+    assert result.report.configurations[0] == 1
     assert result.total_time == pytest.approx(_brute_force(problem.timing.branch_times))
 
 

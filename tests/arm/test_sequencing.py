@@ -59,14 +59,17 @@ def test_paper_preset_reaches_the_optimum_of_a_small_instance():
 @pytest.mark.parametrize(("case", "model"), [("square20", "trapezoid"), ("random30", "joint"),
                                              ("random30", "paper")])
 def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
-    problem = SequencingProblem(builtin_case(case, arm, seed=0), arm, time_model=model)
+    # fixed configurations: the MILP certifies the optimum of this very matrix
+    problem = SequencingProblem(builtin_case(case, arm, seed=0), arm, time_model=model,
+                                configurations="fixed")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=0)
     assert result.total_time == pytest.approx(optimum, rel=1e-9)
 
 
 def test_result_is_consistent(arm):
-    problem = SequencingProblem(builtin_case("square20", arm), arm, first=7)
+    problem = SequencingProblem(builtin_case("square20", arm), arm, time_model="trapezoid",
+                                first=7)
     r = solve(problem, seed=4)
     assert r.order[0] == 7
     assert sorted(r.order.tolist()) == list(range(20))
@@ -75,7 +78,7 @@ def test_result_is_consistent(arm):
     assert r.total_time == pytest.approx(problem.tour_time(r.order))
     assert r.history.generations == r.generations
     assert r.history.best_cost[-1] == pytest.approx(r.total_time)
-    assert r.robot == "planar_2r" and r.time_model == "trapezoid"
+    assert r.report.robot == "planar_2r" and r.report.time_model == "trapezoid"
     d = r.to_dict()
     assert d["order"][0] == 7 and len(d["matrix"]) == 20
     assert "total time" in r.summary()
@@ -136,7 +139,9 @@ def test_bad_solver_params_name_the_field(kwargs, field):
 def test_bad_first_subtask_and_missing_inputs(arm):
     with pytest.raises(ParameterError, match="first"):
         SequencingProblem.from_matrix(_euclidean(0, 5), first=5)
-    with pytest.raises(ParameterError, match="needs subtasks and an arm"):
+    with pytest.raises(ParameterError, match="subtasks must be a SubtaskSet"):
         SequencingProblem(None, arm)
+    with pytest.raises(ParameterError, match="load_arm"):
+        SequencingProblem(builtin_case("square20", arm), "planar_2r")
     with pytest.raises(ParameterError, match="permutation"):
         SequencingProblem.from_matrix(_euclidean(0, 5)).tour_time(np.array([0, 1, 1, 2, 3]))

@@ -20,13 +20,16 @@ def test_solve_prints_order_and_leg_table_and_writes_json_and_plot(tmp_path, cap
     assert "order:" in printed and "leg" in printed and "time [s]" in printed
     data = json.loads(out_json.read_text())
     for key in ("order", "total_time", "leg_times", "matrix", "generations", "restarts",
-                "runtime_s", "seed", "time_model", "robot", "infeasible_legs"):
+                "runtime_s", "seed", "report"):
         assert key in data
+    for key in ("time_model", "robot", "infeasible_legs", "configurations", "diagnostics"):
+        assert key in data["report"]
+    assert data["report"]["time_model"] == "joint"  # the executable default
     assert sorted(data["order"]) == list(range(20))
     m = np.array(data["matrix"])
     order = np.array(data["order"])
     assert data["total_time"] == pytest.approx(m[order, np.roll(order, -1)].sum())
-    assert data["seed"] == 3 and data["robot"] == "planar_2r"
+    assert data["seed"] == 3 and data["report"]["robot"] == "planar_2r"
     assert out_png.stat().st_size > 10_000
 
 

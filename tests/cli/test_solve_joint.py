@@ -22,9 +22,10 @@ def test_joint_model_chooses_configurations_and_writes_trajectory(tmp_path, caps
     printed = capsys.readouterr().out
     assert "elbow:" in printed and "move" in printed and "trajectory valid" in printed
     data = json.loads(out_json.read_text())
-    assert data["configurations_mode"] == "optimize"
-    assert len(data["configurations"]) == 20 and set(data["configurations"]) <= {0, 1}
-    assert data["leg_moves"] == ["joint"] * 20
+    report = data["report"]
+    assert report["configurations_mode"] == "optimize"
+    assert len(report["configurations"]) == 20 and set(report["configurations"]) <= {0, 1}
+    assert report["leg_moves"] == ["joint"] * 20
     order = np.array(data["order"])
     m = np.array(data["matrix"])
     assert data["total_time"] == pytest.approx(m[order, np.roll(order, -1)].sum())
@@ -54,9 +55,10 @@ def test_line_model_table_shows_infeasible_lines_and_elbow_changes(tmp_path, cap
     printed = capsys.readouterr().out
     assert "line infeasible (leaves the reachable annulus)" in printed
     data = json.loads(out_json.read_text())
-    report = data["infeasible_legs"]
-    assert report["fallback"] == "joint" and report["tour_legs_not_straight"]
-    assert "joint" in data["leg_moves"] and "line" in data["leg_moves"]
+    report = data["report"]
+    not_straight = [leg for leg in report["infeasible_legs"] if "line infeasible" in leg["reason"]]
+    assert not_straight and report["diagnostics"]["all_pairs_lines"]["fallback"] == "joint"
+    assert "joint" in report["leg_moves"] and "line" in report["leg_moves"]
     # planar_2r's random30 has subtasks only elbow-up reaches: the fixed branch must change
     assert main(["solve", "--case", "random30", "--time-model", "line", "--configurations",
                  "fixed"]) == 0
@@ -66,8 +68,8 @@ def test_line_model_table_shows_infeasible_lines_and_elbow_changes(tmp_path, cap
 
 def test_cartesian_model_trajectory_reports_the_real_time(tmp_path, capsys):
     out_csv = tmp_path / "t.csv"
-    assert main(["solve", "--case", "square20", "--robot", "asr_twodof", "--trajectory",
-                 str(out_csv)]) == 0
+    assert main(["solve", "--case", "square20", "--robot", "asr_twodof", "--time-model",
+                 "trapezoid", "--trajectory", str(out_csv)]) == 0
     printed = capsys.readouterr().out
     assert "note: the trapezoid model promised" in printed and "trajectory valid" in printed
 
@@ -94,7 +96,7 @@ def test_excluded_lines_without_a_tour_and_unreachable_subtasks_exit_2(tmp_path,
     bx, by = arm.base_xy
     r = 0.5 * (arm.r_min + arm.r_max)
     assert main(["solve", "--case", str(_disc_crossing_csv(tmp_path)), "--robot", "asr_twodof",
-                 "--time-model", "line", "--line-fallback", "exclude"]) == 2
+                 "--time-model", "line", "--line-fallback", "exclude"]) == 1  # ran, no tour
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "excluded straight lines" in err
     bad = tmp_path / "unreachable.csv"

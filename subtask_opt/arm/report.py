@@ -1,0 +1,150 @@
+"""What a tour means for the arm: leg times, moves, configurations, legs it cannot drive.
+
+:func:`subtask_opt.solve` answers with search facts (:class:`~subtask_opt.arm.sequencing.Result`);
+for an arm problem the result also carries a :class:`TourReport` built here, which
+describes only the tour that was returned. All-pairs diagnostics of the time model
+(every straight line of the Cartesian models, every line of the ``line`` model) sit
+apart, under :attr:`TourReport.diagnostics`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from subtask_opt.arm.sequencing import SequencingProblem
+
+BRANCH_LETTERS = "du"  # elbow down, elbow up
+
+
+@dataclass(frozen=True)
+class TourLeg:
+    """One leg of the tour: from -> to, how it is driven and what is wrong with it."""
+
+    index: int
+    start: int
+    end: int
+    configurations: tuple[int, int]
+    distance: float
+    time: float
+    move: str
+    notes: tuple[str, ...] = ()
+    infeasible_line: bool = False
+    """A straight line the arm cannot drive (Cartesian models: outside the
+    annulus, a joint limit or an elbow change; ``line``: replaced or excluded)."""
+    overspeed: float = 0.0
+    """Cartesian models: the joint speed ratio of the straight line, when > 1."""
+
+
+@dataclass(frozen=True)
+class TourReport:
+    """The arm's view of a tour (only the tour's legs; all-pairs figures in ``diagnostics``)."""
+
+    robot: str
+    time_model: str
+    configurations_mode: str
+    configurations: np.ndarray
+    legs: tuple[TourLeg, ...]
+    diagnostics: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def leg_moves(self) -> tuple[str, ...]:
+        return tuple(leg.move for leg in self.legs)
+
+    @property
+    def configuration_changes(self) -> int:
+        """Legs whose two ends use different elbow configurations."""
+        return sum(leg.configurations[0] != leg.configurations[1] for leg in self.legs)
+
+    @property
+    def infeasible(self) -> tuple[TourLeg, ...]:
+        """Legs whose straight line the arm cannot drive as promised."""
+        return tuple(leg for leg in self.legs if leg.infeasible_line or leg.overspeed > 1.0)
+
+    def warning(self) -> str | None:
+        """One line when a Cartesian model's tour breaks the arm's joint limits."""
+        if self.time_model not in ("paper", "trapezoid") or not self.infeasible:
+            return None
+        impossible = sum(leg.infeasible_line for leg in self.legs)
+        fast = sum(leg.overspeed > 1.0 and not leg.infeasible_line for leg in self.legs)
+        worst = max((leg.overspeed for leg in self.legs), default=0.0)
+        return (f"{impossible + fast} of the tour's {len(self.legs)} straight-line legs break "
+                f"a joint limit ({impossible} impossible as a straight line, {fast} over a "
+                f"joint speed limit, worst x{worst:.2f}); use --time-model joint or line for "
+                "times the arm can achieve")
+
+    def leg_table(self) -> str:
+        """One row per leg: from, to, elbow branches, distance, time, move, notes."""
+        rows = [f"{'leg':>4} {'from':>5} {'to':>5} {'elbow':>6} {'dist [m]':>9} "
+                f"{'time [s]':>9} {'move':>5}  notes"]
+        for leg in self.legs:
+            ca, cb = leg.configurations
+            elbow = BRANCH_LETTERS[ca] + ("->" + BRANCH_LETTERS[cb] if ca != cb else "")
+            rows.append(f"{leg.index:>4} {leg.start:>5} {leg.end:>5} {elbow:>6} "
+                        f"{leg.distance:>9.4f} {leg.time:>9.4f} {leg.move:>5}  "
+                        f"{', '.join(leg.notes)}")
+        return "\n".join(rows)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the tour's legs, configurations and infeasible legs; diagnostics apart."""
+        return {
+            "robot": self.robot,
+            "time_model": self.time_model,
+            "configurations_mode": self.configurations_mode,
+            "configurations": [int(c) for c in self.configurations],
+            "leg_moves": list(self.leg_moves),
+            "infeasible_legs": [
+                {"leg": leg.index, "from": leg.start, "to": leg.end,
+                 "reason": "; ".join(leg.notes) or "straight line over a joint limit",
+                 **({"speed_ratio": leg.overspeed} if leg.overspeed > 1.0 else {})}
+                for leg in self.infeasible],
+            "diagnostics": self.diagnostics,
+        }
+
+
+def tour_report(problem: SequencingProblem, order: np.ndarray, configurations: np.ndarray,
+                leg_times: np.ndarray) -> TourReport:
+    """The report of the closed tour ``order`` at ``configurations`` (by subtask index)."""
+    timing = problem.timing
+    check = timing.leg_check
+    points = problem.subtasks.points
+    moves = timing.moves(configurations)
+    n = len(order)
+    legs = []
+    for i in range(n):
+        a, b = int(order[i]), int(order[(i + 1) % n])
+        ca, cb = int(configurations[a]), int(configurations[b])
+        notes: list[str] = []
+        infeasible = False
+        overspeed = 0.0
+        if ca != cb:
+            notes.append("elbow change")
+        if check is not None:
+            if check.outside_annulus[a, b]:
+                infeasible = True
+                notes.append("straight line impossible (inner disc, joint limit or elbow change)")
+            elif check.speed_ratio[a, b] > 1.0:
+                overspeed = float(check.speed_ratio[a, b])
+                notes.append(f"joint speed x{overspeed:.2f} over limit")
+        if problem.time_model == "line" and ca == cb:
+            why = timing.line_failure(a, b, ca, cb)
+            if why is not None:
+                infeasible = True
+                notes.append(f"line infeasible ({why})")
+        move = {0: "joint", 1: "line"}[int(moves[a, b])] if moves is not None else "line"
+        legs.append(TourLeg(i, a, b, (ca, cb), float(np.hypot(*(points[a] - points[b]))),
+                            float(leg_times[i]), move, tuple(notes), infeasible, overspeed))
+    diagnostics: dict[str, Any] = {}
+    if check is not None:
+        diagnostics["all_pairs_leg_check"] = check.to_dict()
+    summary = timing.line_summary(order, configurations) if problem.time_model == "line" else None
+    if summary is not None:
+        diagnostics["all_pairs_lines"] = {k: v for k, v in summary.items()
+                                          if k != "tour_legs_not_straight"}
+    return TourReport(robot=problem.arm.name, time_model=problem.time_model,
+                      configurations_mode=str(problem.configurations),
+                      configurations=np.asarray(configurations, dtype=np.int64),
+                      legs=tuple(legs), diagnostics=diagnostics)
