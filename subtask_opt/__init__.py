@@ -1,4 +1,4 @@
-"""subtask_opt: minimum-time subtask sequencing for a planar arm, and mobile-robot planners.
+"""subtask_opt: minimum-time subtask sequencing for a robot arm, and mobile-robot planners.
 
 The sequencing API::
 
@@ -15,7 +15,16 @@ from subtask_opt import _kernel_cache  # noqa: F401  (first: selects numba's cac
 from subtask_opt.arm.configurations import best_configurations
 from subtask_opt.arm.exact import held_karp, milp_optimum
 from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
-from subtask_opt.arm.sequencing import PRESETS, Result, SequencingProblem, SolverParams, solve
+from subtask_opt.arm.report import TourReport
+from subtask_opt.arm.sequencing import (
+    DEFAULT_TIME_MODEL,
+    PRESETS,
+    MatrixProblem,
+    Result,
+    SequencingProblem,
+    SolverParams,
+    solve,
+)
 from subtask_opt.arm.tasks import CASE_NAMES, SubtaskSet, builtin_case, load_subtasks, save_subtasks
 from subtask_opt.arm.timing.models import TIME_MODELS, LegCheck, TimingResult, travel_times
 from subtask_opt.arm.trajectory import TourTrajectory, tour_trajectory, validate_trajectory
@@ -35,7 +44,8 @@ __all__ = [
     "Arm", "CartesianLimits", "JointLimits", "load_arm", "ROBOT_NAMES",
     "SubtaskSet", "builtin_case", "load_subtasks", "save_subtasks", "CASE_NAMES",
     "TIME_MODELS", "LegCheck", "TimingResult", "travel_times",
-    "SequencingProblem", "SolverParams", "Result", "solve", "PRESETS",
+    "SequencingProblem", "MatrixProblem", "SolverParams", "Result", "TourReport", "solve",
+    "PRESETS", "DEFAULT_TIME_MODEL",
     "best_configurations", "TourTrajectory", "tour_trajectory", "validate_trajectory",
     "held_karp", "milp_optimum",
     "MaxGenerations", "MaxRuntime", "NoImprovement", "TargetCost",

@@ -111,7 +111,7 @@ def _activate() -> Path:
                 shutil.rmtree(old, ignore_errors=True)
     except OSError:  # unwritable: numba falls back to compiling in memory
         pass
-    numba.config.CACHE_DIR = str(folder)
+    numba.config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]
     return folder
 
 

@@ -101,8 +101,8 @@ def milp_optimum(matrix: np.ndarray, *, max_rounds: int = 200) -> tuple[float, n
               np.array([], dtype=np.int32), np.array([], dtype=np.int32), np.array([]))
     h.changeColsIntegrality(n_edges, np.arange(n_edges, dtype=np.int32),
                             np.full(n_edges, highspy.HighsVarType.kInteger))
-    edge_index = {}
-    for e, (i, j) in enumerate(zip(iu, ju, strict=True)):
+    edge_index: dict[tuple[int, int], int] = {}
+    for e, (i, j) in enumerate(zip(iu.tolist(), ju.tolist(), strict=True)):
         edge_index[(i, j)] = e
     for v in range(n):  # every city has degree 2
         idx = np.array([edge_index[(min(v, u), max(v, u))] for u in range(n) if u != v],

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import importlib.metadata
 import importlib.resources
-import json
 import math
 import threading
 from dataclasses import dataclass
@@ -36,11 +35,16 @@ from subtask_opt.base.errors import (
     InputDataError,
     ParameterError,
     UnreachableError,
-    require_positive,
+    require_in_range,
 )
+from subtask_opt.base.files import parse_json, quiet_stderr, read_text
 
 ROBOT_NAMES: tuple[str, ...] = ("planar_2r", "asr_twodof")
 BRANCH_NAMES: tuple[str, str] = ("elbow-down", "elbow-up")
+
+LIMIT_RANGE = (1e-6, 1e6)
+"""Speed, acceleration and jerk limits (Cartesian and joint) lie in this range: outside it a
+time model's arithmetic under- or overflows."""
 
 # Tolerance for "this axis is the world z axis" when reading a URDF.
 _AXIS_TOL = 1e-6
@@ -65,7 +69,7 @@ class CartesianLimits:
     def __post_init__(self) -> None:
         for name in ("kv", "ka", "kw", "kw_dot"):
             value = getattr(self, name)
-            require_positive("CartesianLimits", name, value)
+            require_in_range("CartesianLimits", name, value, *LIMIT_RANGE)
             object.__setattr__(self, name, float(value))
 
 
@@ -103,8 +107,13 @@ class JointLimits:
                     f"JointLimits.{name} must have 2 values (one per joint), got {value!r}")
             if not np.all(np.isfinite(arr)):
                 raise ParameterError(f"JointLimits.{name} must be finite, got {arr.tolist()}")
-            if name not in ("lower", "upper") and np.any(arr <= 0):
-                raise ParameterError(f"JointLimits.{name} must be > 0, got {arr.tolist()}")
+            lo, hi = LIMIT_RANGE
+            if name not in ("lower", "upper") and np.any((arr < lo) | (arr > hi)):
+                raise ParameterError(f"JointLimits.{name} must be in [{lo:g}, {hi:g}], "
+                                     f"got {arr.tolist()}")
+            if name in ("lower", "upper") and np.any(np.abs(arr) > 1e3):
+                raise ParameterError(f"JointLimits.{name} must be within +-1000 rad, "
+                                     f"got {arr.tolist()}")
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
         if np.any(self.lower >= self.upper):
@@ -337,14 +346,8 @@ def _example_robot_data_dir() -> Path:
 
 
 def _read_params(path: Path) -> dict[str, Any]:
-    try:
-        params = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read robot parameter file {path}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise InputDataError(
-            f"robot parameter file {path} is not valid JSON (line {exc.lineno}: {exc.msg})"
-        ) from None
+    params = parse_json(read_text(path, "robot parameter file", max_bytes=1 << 20),
+                        f"robot parameter file {path}")
     if not isinstance(params, dict):
         raise InputDataError(f"robot parameter file {path} must hold a JSON object")
     return params
@@ -397,7 +400,8 @@ def load_arm(name_or_path: str | Path = "planar_2r", *,
         raise InputDataError(f"URDF file not found: {urdf}")
     params = _read_params(params_path) if params_path is not None else {}
     try:
-        model = pin.buildModelFromUrdf(str(urdf))
+        with quiet_stderr():  # the URDF parser prints its own 'Error:' lines; ours follows
+            model = pin.buildModelFromUrdf(str(urdf))
     except (RuntimeError, ValueError) as exc:
         raise InputDataError(f"cannot build a robot model from {urdf}: {exc}") from None
 

@@ -14,6 +14,7 @@ default, a micro-GA whose children are polished by local search.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -202,6 +203,10 @@ class SequencingProblem:
         if not isinstance(self.subtasks, SubtaskSet):
             raise ParameterError(f"SequencingProblem.subtasks must be a SubtaskSet (see "
                                  f"load_subtasks), got {type(self.subtasks).__name__}")
+        if self.subtasks.theta is not None and self.time_model in ("joint", "line"):
+            warnings.warn(f"the {self.time_model} model ignores the subtasks' theta: a 2-link "
+                          "arm cannot choose its tool angle (it follows from the position and "
+                          "the elbow)", UserWarning, stacklevel=3)
         mode = self.configurations or default_configurations(self.time_model)
         if mode not in CONFIGURATION_MODES:
             raise ParameterError(
@@ -447,12 +452,26 @@ def _rotate(tour: np.ndarray, first: int) -> np.ndarray:
     return np.roll(np.asarray(tour, dtype=np.int64), -start)
 
 
+MAX_LEG_TIME = 1e9
+"""The largest finite travel time a matrix may hold (sums of N of them stay exact enough)."""
+MAX_NODES = 20_000
+"""The most nodes a problem may have (dense N x N matrices)."""
+
+
 def _validated_matrix(matrix: np.ndarray, allow_inf: np.ndarray | None = None) -> np.ndarray:
-    m = np.array(matrix, dtype=float)
+    try:
+        raw = np.asarray(matrix)
+        if raw.dtype.kind not in "iuf":
+            raise TypeError
+        m = np.array(raw, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputDataError("travel-time matrix must hold real numbers") from None
     if m.ndim != 2 or m.shape[0] != m.shape[1]:
         raise InputDataError(f"travel-time matrix must be square, got shape {m.shape}")
     if m.shape[0] < 3:
         raise InputDataError(f"need at least 3 subtasks, got {m.shape[0]}")
+    if m.shape[0] > MAX_NODES:
+        raise InputDataError(f"the matrix has {m.shape[0]} nodes; the limit is {MAX_NODES}")
     bad = np.argwhere(~np.isfinite(m) & (True if allow_inf is None else ~allow_inf))
     if bad.size:
         i, j = bad[0]
@@ -462,6 +481,11 @@ def _validated_matrix(matrix: np.ndarray, allow_inf: np.ndarray | None = None) -
     if neg.size:
         i, j = neg[0]
         raise InputDataError(f"travel time from subtask {i} to {j} is negative ({m[i, j]})")
+    big = np.argwhere(np.isfinite(m) & (m > MAX_LEG_TIME))
+    if big.size:
+        i, j = big[0]
+        raise InputDataError(f"travel time from subtask {i} to {j} is {m[i, j]:g}; the limit "
+                             f"is {MAX_LEG_TIME:g} (scale the matrix)")
     m.setflags(write=False)
     return m
 

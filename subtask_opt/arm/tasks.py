@@ -21,11 +21,16 @@ import numpy as np
 
 from subtask_opt.arm.model import Arm
 from subtask_opt.base.errors import InputDataError, ParameterError, require_int, require_positive
+from subtask_opt.base.files import parse_json, read_text
 
 CASE_NAMES: tuple[str, ...] = ("square20", "random30")
 
-# Two subtasks equal to this resolution (m) count as duplicates.
-_DUPLICATE_TOL = 1e-9
+DUPLICATE_TOL = 1e-9
+"""Two subtasks closer than this (m, Euclidean) are duplicates and refused."""
+MAX_COORDINATE = 1e6
+"""Subtask coordinates are in [-1e6, 1e6] m."""
+MAX_SUBTASKS = 20_000
+"""The most subtasks a set may hold (the N x N matrices of a time model: 3.2 GB at 20 000)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,37 +52,29 @@ class SubtaskSet:
     name: str = ""
 
     def __post_init__(self) -> None:
-        try:
-            pts = np.array(self.points, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InputDataError(
-                f"SubtaskSet.points must be numbers of shape (N, 2), got {self.points!r}"
-            ) from None
+        pts = _real_array(self.points, "SubtaskSet.points", "numbers of shape (N, 2)")
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise InputDataError(f"SubtaskSet.points must have shape (N, 2), got {pts.shape}")
         if pts.shape[0] < 3:
             raise InputDataError(
                 f"SubtaskSet.points needs at least 3 subtasks, got {pts.shape[0]}")
-        bad = np.flatnonzero(~np.isfinite(pts).all(axis=1))
+        if pts.shape[0] > MAX_SUBTASKS:
+            raise InputDataError(f"SubtaskSet.points has {pts.shape[0]} subtasks; the limit is "
+                                 f"{MAX_SUBTASKS}")
+        bad = np.flatnonzero(~(np.abs(pts) <= MAX_COORDINATE).all(axis=1))
         if bad.size:
-            raise InputDataError(f"subtask {bad[0]} is not finite: {pts[bad[0]].tolist()}")
-        # Duplicates: equal once rounded to the nanometre; sorting keeps this O(N log N).
-        key = np.round(pts / _DUPLICATE_TOL)
-        order = np.lexsort((key[:, 1], key[:, 0]))
-        same = np.flatnonzero((key[order[1:]] == key[order[:-1]]).all(axis=1))
-        if same.size:
-            i, j = sorted((int(order[same[0]]), int(order[same[0] + 1])))
+            raise InputDataError(f"subtask {bad[0]} is {pts[bad[0]].tolist()}: coordinates "
+                                 f"must be finite and within +-{MAX_COORDINATE:g} m")
+        pair = _close_pair(pts, DUPLICATE_TOL)
+        if pair is not None:
+            i, j = pair
             raise InputDataError(
-                f"subtasks {i} and {j} are duplicates: both at {pts[i].tolist()}")
+                f"subtasks {i} and {j} are duplicates: {pts[i].tolist()} and "
+                f"{pts[j].tolist()} are closer than {DUPLICATE_TOL:g} m")
         pts.setflags(write=False)
         object.__setattr__(self, "points", pts)
         if self.theta is not None:
-            try:
-                th = np.array(self.theta, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise InputDataError(
-                    f"SubtaskSet.theta must be {pts.shape[0]} numbers, got {self.theta!r}"
-                ) from None
+            th = _real_array(self.theta, "SubtaskSet.theta", f"{pts.shape[0]} numbers")
             if th.shape != (pts.shape[0],):
                 raise InputDataError(
                     f"SubtaskSet.theta must have {pts.shape[0]} values (one per subtask), "
@@ -105,8 +102,37 @@ class SubtaskSet:
         return out
 
 
+def _real_array(values: Any, what: str, expected: str) -> np.ndarray:
+    """``values`` as float64, refusing strings, complex numbers and overflowing integers."""
+    try:
+        arr = np.asarray(values)
+        if arr.dtype.kind not in "iuf":
+            raise TypeError
+        return np.array(arr, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        shown = repr(values)
+        raise InputDataError(f"{what} must be real {expected}, got "
+                             f"{shown[:80] + '...' if len(shown) > 80 else shown}") from None
+
+
+def _close_pair(pts: np.ndarray, tol: float) -> tuple[int, int] | None:
+    """Two indices of points closer than ``tol`` (Euclidean), or None; O(N log N) typical."""
+    order = np.argsort(pts[:, 0], kind="stable")
+    xs = pts[order, 0]
+    for a in range(len(order)):
+        b = a + 1
+        while b < len(order) and xs[b] - xs[a] < tol:
+            i, j = int(order[a]), int(order[b])
+            if math.hypot(*(pts[i] - pts[j])) < tol:
+                return (min(i, j), max(i, j))
+            b += 1
+    return None
+
+
 def _number(text: str, path: Path, line: int, column: str) -> float:
     try:
+        if len(text) > 64:
+            raise ValueError
         return float(text)
     except ValueError:
         raise InputDataError(
@@ -114,7 +140,12 @@ def _number(text: str, path: Path, line: int, column: str) -> float:
 
 
 def _load_csv(path: Path, text: str) -> SubtaskSet:
-    rows = [(n, row) for n, row in enumerate(csv.reader(text.splitlines()), start=1)
+    lines = text.splitlines()
+    long = next((n for n, line in enumerate(lines, start=1) if len(line) > 1000), None)
+    if long is not None:
+        raise InputDataError(f"{path}, line {long}: longer than 1000 characters "
+                             "(expected x,y[,theta] numbers)")
+    rows = [(n, row) for n, row in enumerate(csv.reader(lines), start=1)
             if row and any(cell.strip() for cell in row)]
     if not rows:
         raise InputDataError(f"{path} is empty: expected a header x,y[,theta] and rows")
@@ -139,10 +170,7 @@ def _load_csv(path: Path, text: str) -> SubtaskSet:
 
 
 def _load_json(path: Path, text: str) -> SubtaskSet:
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputDataError(f"{path}, line {exc.lineno}: invalid JSON ({exc.msg})") from None
+    data = parse_json(text, str(path))
     if not isinstance(data, dict) or "points" not in data:
         raise InputDataError(f'{path}: expected an object {{"points": [[x, y], ...]}}')
     points = data["points"]
@@ -180,12 +208,7 @@ def load_subtasks(path: str | Path) -> SubtaskSet:
     suffix = path.suffix.lower()
     if suffix not in (".csv", ".json"):
         raise InputDataError(f"subtask file must end in .csv or .json, got {path.name!r}")
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise InputDataError(f"subtask file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read subtask file {path}: {exc}") from None
+    text = read_text(path, "subtask file")
     return _load_csv(path, text) if suffix == ".csv" else _load_json(path, text)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -122,9 +123,14 @@ def run(args: argparse.Namespace) -> int:
         subtasks = builtin_case(args.case, arm, seed=args.case_seed)
     else:
         subtasks = load_subtasks(Path(args.case))
-    problem = SequencingProblem(subtasks, arm, time_model=args.time_model, first=args.first,
-                                k=args.k, elbow=args.elbow, configurations=args.configurations,
-                                line_fallback=args.line_fallback)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        problem = SequencingProblem(subtasks, arm, time_model=args.time_model, first=args.first,
+                                    k=args.k, elbow=args.elbow,
+                                    configurations=args.configurations,
+                                    line_fallback=args.line_fallback)
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
     stop = _stop_criteria(args)
     params = SolverParams(preset=args.preset)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):

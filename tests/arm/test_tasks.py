@@ -42,9 +42,9 @@ def test_subtask_set_basics() -> None:
 @pytest.mark.parametrize("points, match", [
     (PTS[:2], "at least 3 subtasks, got 2"),
     (np.zeros((0, 2)), "at least 3 subtasks, got 0"),
-    (np.vstack([PTS, [[np.nan, 0.0]]]), r"subtask 4 is not finite"),
-    (np.vstack([PTS, [[0.0, np.inf]]]), r"subtask 4 is not finite"),
-    (np.vstack([PTS, PTS[1:2]]), r"subtasks 1 and 4 are duplicates: both at \[0.3, -0.1\]"),
+    (np.vstack([PTS, [[np.nan, 0.0]]]), r"subtask 4 is \[nan, 0.0\]: coordinates must be finite"),
+    (np.vstack([PTS, [[0.0, np.inf]]]), r"subtask 4 is \[0.0, inf\]: coordinates must be finite"),
+    (np.vstack([PTS, PTS[1:2]]), r"subtasks 1 and 4 are duplicates: \[0.3, -0.1\] and"),
     (np.zeros((4, 3)), r"shape \(N, 2\)"),
     ([["a", "b"]] * 3, "numbers"),
 ])

@@ -1,0 +1,124 @@
+"""Reading user files safely: a size limit before reading, a nesting limit before parsing JSON.
+
+Every reader of the package goes through :func:`read_text` (and :func:`parse_json` for
+JSON), so a 50 MB one-line CSV, a file nested thousands deep or a number with thousands
+of digits is refused with one :class:`~subtask_opt.base.errors.InputDataError` line
+naming the file and the limit, never a ``RecursionError`` or ``OverflowError``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from subtask_opt.base.errors import InputDataError
+
+MAX_FILE_BYTES = 64 * 1024 * 1024
+"""The largest input file any reader accepts (64 MiB)."""
+MAX_JSON_DEPTH = 32
+"""The deepest JSON nesting any reader accepts."""
+MAX_NUMBER_CHARS = 64
+"""The longest number literal a JSON input may hold (a float needs at most ~25)."""
+
+
+def read_text(path: str | Path, what: str, *, max_bytes: int = MAX_FILE_BYTES) -> str:
+    """The text of ``path`` (UTF-8, a leading BOM dropped), refusing files over ``max_bytes``."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+    except FileNotFoundError:
+        raise InputDataError(f"{what} not found: {path}") from None
+    except OSError as exc:
+        raise InputDataError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    if path.is_dir():
+        raise InputDataError(f"{what} {path} is a folder, not a file")
+    if size > max_bytes:
+        raise InputDataError(f"{what} {path} has {size} bytes; the limit is {max_bytes}")
+    try:
+        return path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputDataError(f"{what} {path} is not UTF-8 text ({exc.reason} at byte "
+                             f"{exc.start})") from None
+    except OSError as exc:
+        raise InputDataError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+
+
+def json_depth(text: str) -> int:
+    """The deepest ``[``/``{`` nesting of a JSON text (brackets inside strings ignored)."""
+    depth = deepest = 0
+    in_string = escaped = False
+    for ch in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif ch == "\\":
+                escaped = True
+            elif ch == '"':
+                in_string = False
+        elif ch == '"':
+            in_string = True
+        elif ch in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif ch in "]}":
+            depth -= 1
+    return deepest
+
+
+def _finite_float(text: str) -> float:
+    if len(text) > MAX_NUMBER_CHARS:
+        raise ValueError(f"a number of {len(text)} characters (limit {MAX_NUMBER_CHARS})")
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"the number {text[:20]} is out of range")
+    return value
+
+
+def _reject_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a number")
+
+
+def parse_json(text: str, where: str, *, max_depth: int = MAX_JSON_DEPTH) -> Any:
+    """Parse JSON whose nesting is at most ``max_depth``; numbers become finite floats or ints
+    of at most :data:`MAX_NUMBER_CHARS` digits; NaN and Infinity are refused."""
+    depth = json_depth(text)
+    if depth > max_depth:
+        raise InputDataError(f"{where}: JSON nested {depth} deep; the limit is {max_depth}")
+    try:
+        return json.loads(text, parse_float=_finite_float, parse_int=_checked_int,
+                          parse_constant=_reject_constant)
+    except json.JSONDecodeError as exc:
+        raise InputDataError(f"{where}, line {exc.lineno}: invalid JSON ({exc.msg})") from None
+    except (ValueError, RecursionError) as exc:
+        raise InputDataError(f"{where}: invalid JSON ({exc})") from None
+
+
+def _checked_int(text: str) -> int:
+    if len(text) > MAX_NUMBER_CHARS:
+        raise ValueError(f"a number of {len(text)} digits (limit {MAX_NUMBER_CHARS})")
+    return int(text)
+
+
+@contextmanager
+def quiet_stderr() -> Iterator[None]:
+    """Silence what C++ libraries write to file descriptor 2 (their own error lines)."""
+    try:
+        fd = sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):  # no real stderr (captured): nothing to do
+        yield
+        return
+    sys.stderr.flush()
+    saved = os.dup(fd)
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), fd)
+            yield
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
