@@ -104,13 +104,13 @@ class SolverParams:
     def paper(cls) -> SolverParams:
         return cls(preset="paper")
 
-    def default_stop(self) -> list[StoppingCriterion]:
-        """Stopping criteria used when :func:`solve` is given none."""
+    def default_stop(self, size: int = 30) -> list[StoppingCriterion]:
+        """Stopping criteria used when :func:`solve` is given none, for ``size`` nodes."""
         if self.preset == "paper":
             return [NoImprovement(2000), MaxGenerations(50_000)]
         # 15 stalled generations reach the certified optimum of every built-in
-        # instance in benchmarks/sequencing.py; pass NoImprovement(50) for more certainty.
-        return [NoImprovement(15), MaxGenerations(50_000)]
+        # 30-subtask instance in benchmarks/sequencing.py; larger tours need longer stalls.
+        return [NoImprovement(max(15, size // 4)), MaxGenerations(50_000)]
 
 
 @dataclass(frozen=True)
@@ -376,7 +376,7 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         params = SolverParams()
     elif not isinstance(params, SolverParams):
         raise ParameterError(f"solve: params must be a SolverParams, got {params!r}")
-    criteria = as_criteria(stop, params.default_stop())
+    criteria = as_criteria(stop, params.default_stop(problem.size))
     matrix = problem.matrix
     n = problem.size
     paper = params.preset == "paper"
@@ -386,11 +386,11 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         data = problem.configured_data()
         kind = Kind.CONFIGURED_PERMUTATION
         search = SEARCH_PAPER if paper else SEARCH_FAST
-        neighbours = neighbour_table(data[:, :n])
+        neighbours = neighbour_table(data[:, :n], params.neighbours)
     else:
         # a GA tour may not use an excluded leg: a finite penalty keeps the costs comparable
         data = np.where(np.isfinite(matrix), matrix, penalty_for(matrix))
-        neighbours = neighbour_table(matrix)
+        neighbours = neighbour_table(matrix, params.neighbours)
         kind = Kind.PERMUTATION
         if paper:
             search = SEARCH_PAPER

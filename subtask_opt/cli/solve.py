@@ -76,7 +76,7 @@ def register(root: argparse._SubParsersAction) -> None:
     stop = p.add_argument_group("stopping (any criterion given stops the run)")
     stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
                       help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
-    stop.add_argument("--max-runtime", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
+    stop.add_argument("--time-limit", "--max-runtime", dest="max_runtime", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
                       metavar="SECONDS", help=f"at most this long, in (0, {MAX_RUNTIME_S:g}]")
     stop.add_argument("--no-improvement", type=int_in(1, MAX_STALL), metavar="N",
                       help=f"stop after N generations without a better tour, N in [1, {MAX_STALL}]")
@@ -134,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
     stop = _stop_criteria(args)
     params = SolverParams(preset=args.preset)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
-        stop = stop + params.default_stop()
+        stop = stop + params.default_stop(len(subtasks))
     result = solve(problem, seed=args.seed, stop=stop, params=params,
                    progress=not args.no_progress)
     report = result.report

@@ -38,11 +38,29 @@ AUX_FALLBACK, AUX_GRASP, AUX_MAX_SEGMENT, AUX_NEIGHBOURS, AUX_SEARCH = range(5)
 _AUX_TABLE = 5
 
 
-def neighbour_table(matrix: np.ndarray) -> np.ndarray:
-    """Each city's other cities, nearest first (by the cheaper of the two directions)."""
+def neighbour_table(matrix: np.ndarray, k: int | None = None) -> np.ndarray:
+    """Each city's ``k`` nearest other cities (default: all), nearest first, by the cheaper
+    of the two directions; ties go to the lower index (as a stable sort would).
+
+    Only the ``k`` nearest are sorted (``argpartition``), so building the table costs
+    O(N^2) plus O(N k log k) rather than a full O(N^2 log N) sort.
+    """
     closeness = np.minimum(matrix, matrix.T).astype(float)
     np.fill_diagonal(closeness, np.inf)
-    return np.argsort(closeness, axis=1, kind="stable")[:, :-1]
+    n = closeness.shape[0]
+    k = n - 1 if k is None else max(1, min(int(k), n - 1))
+    if k >= n - 1:
+        return np.argsort(closeness, axis=1, kind="stable")[:, :-1]
+    part = np.argpartition(closeness, k - 1, axis=1)[:, :k]
+    values = np.take_along_axis(closeness, part, axis=1)
+    order = np.lexsort((part, values), axis=1)  # by value, then index
+    table = np.take_along_axis(part, order, axis=1)
+    # a tie at the k-th value may have left out a lower index: redo those rows exactly
+    kth = values.max(axis=1)
+    ties = np.flatnonzero((closeness <= kth[:, None]).sum(axis=1) > k)
+    for i in ties:
+        table[i] = np.argsort(closeness[i], kind="stable")[:k]
+    return table
 
 
 def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.25,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -157,3 +158,15 @@ def test_tour_cost_matches_numpy():
     tour = np.random.default_rng(8).permutation(9).astype(np.int64)
     expected = m[tour, np.roll(tour, -1)].sum()
     assert abs(tour_cost(tour, 9, m, None) - expected) < 1e-12
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_partial_neighbour_table_equals_the_stable_full_sort(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 40))
+    # integer costs make ties, which must go to the lower index as in a stable sort
+    m = rng.integers(0, 4, (n, n)).astype(float) if seed % 2 else rng.random((n, n))
+    full = np.argsort(np.where(np.eye(n, dtype=bool), np.inf, np.minimum(m, m.T)), axis=1,
+                      kind="stable")[:, :-1]
+    for k in (1, 3, 8, n - 1):
+        np.testing.assert_array_equal(neighbour_table(m, k), full[:, :min(k, n - 1)])
