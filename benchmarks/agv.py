@@ -1,5 +1,6 @@
 """AGV benchmarks (seed 004): quadtree vs grid planning, the paper scenarios,
-and the 200-run random suite with and without the t-second collision check.
+and the 200-run random suite (odometry drift on; with and without corner
+check points) with and without the t-second collision check.
 
     .venv/bin/python benchmarks/agv.py [--n 200] [--seed 0] [--json OUT] [--out DIR]
 
@@ -14,13 +15,19 @@ import argparse
 import json
 import math
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from subtask_opt.planners.agv.quadtree import compare_with_grid, decompose
-from subtask_opt.planners.agv.scenarios import PAPER_SCENARIOS, random_scenario, run_suite
-from subtask_opt.planners.agv.simulation import AgvParams, simulate
+from subtask_opt.planners.agv.scenarios import (
+    PAPER_SCENARIOS,
+    random_agv_scenario,
+    run_agv_suite,
+    suite_params,
+)
+from subtask_opt.planners.agv.simulation import simulate
 
 
 def quadtree_vs_grid(seed: int, n_maps: int = 20) -> list[dict]:
@@ -28,7 +35,7 @@ def quadtree_vs_grid(seed: int, n_maps: int = 20) -> list[dict]:
     sc = PAPER_SCENARIOS["1"]()
     rows.append({"map": "experiment 1", **_flat(compare_with_grid(sc.world, sc.start, sc.goal))})
     for i in range(n_maps):
-        rs = random_scenario(seed + i, n_obstacles=0)
+        rs = random_agv_scenario(seed + i, n_obstacles=0)
         rows.append({"map": f"random {seed + i}",
                      **_flat(compare_with_grid(rs.world, rs.start, rs.goal))})
     return rows
@@ -46,7 +53,7 @@ def main() -> None:
     ap.add_argument("--out")
     args = ap.parse_args()
 
-    simulate(random_scenario(10_000))  # warm-up: JIT compile outside the timings
+    simulate(random_agv_scenario(10_000), seed=0)  # warm-up: JIT compile outside the timings
 
     print("== quadtree vs 8-connected grid (octile distance transform), same map ==")
     rows = quadtree_vs_grid(args.seed)
@@ -77,9 +84,7 @@ def main() -> None:
             out = Path(args.out)
             out.mkdir(parents=True, exist_ok=True)
             plots.animate_run(run, out / f"agv_{name}.gif")
-            fig = plots.plot_run(run)
-            fig.savefig(out / f"agv_{name}.png", dpi=120, bbox_inches="tight")
-            plt.close(fig)
+            plots.save_run_figure(run, out / f"agv_{name}.png")
             if name == "1":
                 tree = decompose(run.world.occupancy)
                 fig = plots.plot_quadtree(tree, run.world.occupancy)
@@ -88,10 +93,15 @@ def main() -> None:
 
     print(f"\n== random suite: {args.n} runs from seed {args.seed} ==")
     t0 = time.perf_counter()
-    on = run_suite(args.n, args.seed)
+    on = run_agv_suite(args.n, args.seed)
     print(on.summary())
-    off = run_suite(args.n, args.seed, params=AgvParams(collision_check=False))
+    off = run_agv_suite(args.n, args.seed,
+                        params=replace(suite_params(), collision_check=False))
     print(off.summary())
+    if args.out:
+        from subtask_opt.plotting import agv as plots
+
+        plots.save_suite_figure(on, Path(args.out) / "agv_suite.png")
     print(f"both suites: {time.perf_counter() - t0:.1f} s wall")
 
     if args.json:

@@ -60,7 +60,7 @@ def run_instance(robot: str, case: str, instance: int, seed: int, arm) -> list[d
             "robot": robot, "case": case, "instance": instance, "model": model,
             "predicted_s": result.total_time, "executed_s": trajectory.duration,
             "valid": report.ok, "violations": list(report.violations),
-            "elbow_changes": result.configuration_changes,
+            "elbow_changes": result.report.configuration_changes,
             "joint_moves": sum(leg.kind == "joint" for leg in trajectory.legs),
         }
         if model in ("paper", "trapezoid"):

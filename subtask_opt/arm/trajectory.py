@@ -18,11 +18,23 @@ the same legs (a joint move where the line is impossible), so the duration is
 what the arm really needs, and :attr:`TourTrajectory.predicted_time` keeps
 what the model promised.
 
-Straight-line legs are acceleration-limited (the path parameterisation has
-no jerk limit); joint moves are jerk-limited when the arm has jerk limits.
+When the arm has joint jerk limits every leg honours them: joint moves are
+ruckig's jerk-limited profiles, and a straight line is the time-optimal
+acceleration-limited profile averaged over a window (which makes its
+acceleration continuous) and slowed down uniformly until the velocity,
+acceleration and jerk limits hold
+(:func:`subtask_opt.arm.timing._line_kernels.line_profile`); the ``line``
+time model times the legs the same way, so the executed duration is the
+predicted one. Without jerk limits (``asr_twodof``) lines are
+acceleration-limited and joint moves trapezoids.
 
 :func:`validate_trajectory` samples a trajectory densely and reports every
-joint position, velocity or acceleration limit it exceeds.
+joint position, velocity, acceleration or jerk limit it exceeds.
+
+Sampling steps: ``dt`` of :meth:`TourTrajectory.sample`, :meth:`TourTrajectory.to_csv`
+and :func:`validate_trajectory` must lie in [:data:`MIN_DT`, :data:`MAX_DT`] s
+and give at most :data:`MAX_SAMPLES` samples; the count is estimated before
+anything is allocated.
 """
 
 from __future__ import annotations
@@ -48,6 +60,15 @@ if TYPE_CHECKING:
 DEFAULT_RTOL = 1e-3
 # Absolute slack on joint position limits (rad).
 DEFAULT_QTOL = 1e-7
+# Relative slack on jerk limits. The jerk is checked by finite differences of the
+# sampled accelerations on the uniform grid k dt: a difference quotient is the mean
+# jerk over its step, so for a continuous acceleration it never exceeds the largest
+# jerk; the slack only covers round-off and the lines' check between grid instants.
+DEFAULT_JTOL = 1e-3
+# Range of sampling steps (s) and the most samples one call may allocate.
+MIN_DT = 1e-6
+MAX_DT = 10.0
+MAX_SAMPLES = 10_000_000
 
 CSV_HEADER = "t,q1,q2,dq1,dq2,x,y"
 
@@ -151,9 +172,12 @@ class TourTrajectory:
         return q[0], qd[0], qdd[0]
 
     def sample(self, dt: float = 0.01) -> TrajectorySamples:
-        """Samples every ``dt`` seconds from 0, plus the final instant."""
-        require_positive("TourTrajectory.sample", "dt", dt)
-        n = int(math.floor(self.duration / dt))
+        """Samples every ``dt`` seconds from 0, plus the final instant.
+
+        Raises:
+            ParameterError: dt outside [MIN_DT, MAX_DT] or more than MAX_SAMPLES samples.
+        """
+        n = _sample_count("TourTrajectory.sample", self.duration, dt)
         t = np.arange(n + 1) * dt
         if t[-1] < self.duration:
             t = np.append(t, self.duration)
@@ -164,6 +188,20 @@ class TourTrajectory:
     def to_csv(self, path: str | Path, dt: float = 0.01) -> Path:
         """Write the samples at step ``dt`` as CSV (see :meth:`TrajectorySamples.to_csv`)."""
         return self.sample(dt).to_csv(path)
+
+
+def _sample_count(owner: str, duration: float, dt: float) -> int:
+    """floor(duration / dt), after checking dt and that the samples fit MAX_SAMPLES."""
+    require_positive(owner, "dt", dt)
+    if not MIN_DT <= dt <= MAX_DT:
+        raise ParameterError(f"{owner}.dt must be in [{MIN_DT:g}, {MAX_DT:g}] s, got {dt!r}")
+    estimate = duration / dt + 2.0
+    if estimate > MAX_SAMPLES:
+        raise ParameterError(
+            f"{owner}.dt = {dt:g} s would need about {estimate:.3g} samples for the "
+            f"{duration:.4g} s trajectory, more than the limit of {MAX_SAMPLES:.0e}; "
+            f"use dt >= {duration / (MAX_SAMPLES - 2):.3g} s")
+    return int(math.floor(duration / dt))
 
 
 def _ruckig_leg(q0: np.ndarray, q1: np.ndarray, arm: Arm):
@@ -198,34 +236,30 @@ def _ruckig_leg(q0: np.ndarray, q1: np.ndarray, arm: Arm):
 
 
 def _line_leg(p_from: np.ndarray, p_to: np.ndarray, q_from: np.ndarray, q_to: np.ndarray,
-              branch: int, arm: Arm, grid: int, reverse: bool):
-    """Time-optimal straight line p_from -> p_to: (duration, evaluator).
+              branch: int, arm: Arm, grid: int, reverse: bool) -> Any:
+    """Straight line p_from -> p_to as the ``line`` model drives it: (duration, evaluator).
+
+    None when the arm cannot follow the line on ``branch``.
 
     The profile is computed in the direction the travel-time tensor used
     (``reverse``: computed p_to -> p_from and played backwards), so the
     duration is the tensor's time to the last bit.
     """
-    jl = arm.joint_limits
-    cl = arm.cartesian_limits
+    from subtask_opt.arm.timing.models import line_limits
+
     a, b, qa, qb = (p_to, p_from, q_to, q_from) if reverse else (p_from, p_to, q_from, q_to)
     a = np.ascontiguousarray(a, dtype=np.float64)
     b = np.ascontiguousarray(b, dtype=np.float64)
-    st, sg, qs, der = _lk.line_geometry(arm.kinematics, a, b, branch,
-                                    np.ascontiguousarray(qa, dtype=np.float64),
-                                    np.ascontiguousarray(qb, dtype=np.float64), grid)
-    ok = st == _lk.LINE_OK
-    if ok:
-        ok, x, w, duration = _lk.topp_profile(der, sg,
-                                               np.array(jl.velocity), np.array(jl.acceleration),
-                                               cl.kv, cl.ka, cl.kw, cl.kw_dot)
-    if not ok:
-        raise ParameterError(f"the straight line {a.tolist()} -> {b.tolist()} is not feasible "
-                             f"for {arm.name} (status {st})")
+    st, sg, qs, x, w, tau, lam, duration = _lk.line_profile(
+        arm.kinematics, a, b, branch, np.ascontiguousarray(qa, dtype=np.float64),
+        np.ascontiguousarray(qb, dtype=np.float64), line_limits(arm, grid))
+    if st != _lk.LINE_OK:
+        return None
 
-    def evaluate(t: np.ndarray):
+    def evaluate(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         tt = duration - t if reverse else t
-        q, qd, qdd = _lk.line_states(arm.kinematics, a, b, branch, sg, qs, x, w,
-                                     np.ascontiguousarray(tt))
+        q, qd, qdd, _ = _lk.line_states(arm.kinematics, a, b, branch, sg, qs, x, w, tau, lam,
+                                        np.ascontiguousarray(tt, dtype=np.float64))
         return (q, -qd, qdd) if reverse else (q, qd, qdd)
 
     return float(duration), evaluate
@@ -239,22 +273,26 @@ def tour_trajectory(problem: SequencingProblem, result: Result) -> TourTrajector
             does not belong to the problem.
     """
     from subtask_opt.arm.sequencing import Result, SequencingProblem
-    from subtask_opt.arm.timing.models import MOVE_LINE, MOVE_NONE, travel_times
+    from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE
 
-    if not isinstance(problem, SequencingProblem) or not isinstance(result, Result):
-        raise ParameterError("tour_trajectory needs a SequencingProblem and its Result")
-    if problem.arm is None or problem.subtasks is None:
+    if not isinstance(problem, SequencingProblem) or problem.arm is None:
         raise ParameterError("tour_trajectory needs a problem built from subtasks and an arm "
-                             "(a custom matrix has no robot to move)")
+                             f"(got {type(problem).__name__}; a custom matrix has no robot to "
+                             "move)")
+    if not isinstance(result, Result):
+        raise ParameterError(f"tour_trajectory needs the problem's Result, got "
+                             f"{type(result).__name__}")
     if len(result.order) != problem.size:
         raise ParameterError(f"result has {len(result.order)} subtasks, the problem "
                              f"{problem.size}")
     arm = problem.arm
     timing = problem.timing
-    configs = np.asarray(result.configurations, dtype=np.int64)
-    if timing.branch_moves is None:  # a Cartesian model: drive its lines as the arm can
-        timing = travel_times(problem.subtasks, arm, "line", configurations=configs,
-                              line_fallback="joint")
+    if result.report is None:
+        raise ParameterError("tour_trajectory needs the Result of an arm problem (it has no "
+                             "report of configurations)")
+    configs = np.asarray(result.report.configurations, dtype=np.int64)
+    # A Cartesian model (no move tensor): each leg is driven as the ``line`` model with
+    # the joint fallback would drive it, a line where the arm can follow it.
     moves = timing.branch_moves
     qb = timing.branch_joints
     grid = timing.line_grid or 512
@@ -266,20 +304,30 @@ def tour_trajectory(problem: SequencingProblem, result: Result) -> TourTrajector
     for k in range(n):
         i, j = int(order[k]), int(order[(k + 1) % n])
         ci, cj = int(configs[i]), int(configs[j])
-        move = int(moves[i, ci, j, cj])
+        if moves is None or qb is None:
+            assert timing.joint_positions is not None
+            q0, q1 = timing.joint_positions[i], timing.joint_positions[j]
+            move = MOVE_LINE if ci == cj else MOVE_JOINT
+        else:
+            q0, q1 = qb[i, ci], qb[j, cj]
+            move = int(moves[i, ci, j, cj])
         if move == MOVE_NONE:
             raise ParameterError(f"leg {i} -> {j} has no feasible move (excluded line)")
-        q0, q1 = qb[i, ci], qb[j, cj]
+        line = None
         if move == MOVE_LINE:
-            duration, ev = _line_leg(points[i], points[j], q0, q1, ci, arm, grid,
-                                     reverse=i > j)
+            line = _line_leg(points[i], points[j], q0, q1, ci, arm, grid, reverse=i > j)
+            if line is None and moves is not None:
+                raise ParameterError(f"the straight line {i} -> {j} is not feasible for "
+                                     f"{arm.name}, but the time model drove it")
+        if line is not None:
+            duration, ev = line
             kind = "line"
         else:
             duration, ev = _ruckig_leg(q0, q1, arm)
             kind = "joint"
         legs.append(Leg(start, duration, kind, i, j, ci, cj, q0.copy(), q1.copy(), ev))
         start += duration
-    return TourTrajectory(arm, legs, result.total_time, result.time_model)
+    return TourTrajectory(arm, legs, result.total_time, problem.time_model)
 
 
 @dataclass(frozen=True)
@@ -296,6 +344,9 @@ class ValidationReport:
         position_margin: smallest distance to a position limit (rad; < 0 beyond).
         violations: one line per exceeded limit (first sample of each kind).
         rtol, qtol: the tolerances used.
+        max_jerk_ratio: max over the uniform grid of |finite-difference jerk| /
+            limit, per joint; None when the arm has no jerk limits (not checked).
+        jtol: the relative tolerance on the jerk limits.
     """
 
     ok: bool
@@ -309,6 +360,8 @@ class ValidationReport:
     violations: tuple[str, ...]
     rtol: float
     qtol: float
+    max_jerk_ratio: tuple[float, float] | None = None
+    jtol: float = DEFAULT_JTOL
 
     @property
     def duration_error(self) -> float:
@@ -316,44 +369,68 @@ class ValidationReport:
         return abs(self.duration - self.predicted_time) / self.predicted_time
 
     def summary(self) -> str:
+        """One line: valid or not, the samples, durations and the largest limit ratios."""
         head = "valid" if self.ok else f"INVALID ({len(self.violations)} violations)"
+        jerk = ("jerk not checked (no jerk limits)" if self.max_jerk_ratio is None
+                else f"max |dddq|/limit {max(self.max_jerk_ratio):.4f}")
         return (f"trajectory {head}: {self.n_samples} samples at dt={self.dt:g} s, duration "
                 f"{self.duration:.4f} s (predicted {self.predicted_time:.4f} s), max |qd|/limit "
                 f"{max(self.max_velocity_ratio):.4f}, max |qdd|/limit "
-                f"{max(self.max_acceleration_ratio):.4f}")
+                f"{max(self.max_acceleration_ratio):.4f}, {jerk}")
 
 
 def validate_trajectory(trajectory: TourTrajectory, *, dt: float = 1e-3,
-                        rtol: float = DEFAULT_RTOL, qtol: float = DEFAULT_QTOL
-                        ) -> ValidationReport:
+                        rtol: float = DEFAULT_RTOL, qtol: float = DEFAULT_QTOL,
+                        jtol: float = DEFAULT_JTOL) -> ValidationReport:
     """Sample ``trajectory`` every ``dt`` seconds (and at every leg boundary) and check limits.
 
     A sample violates a limit when a joint position leaves [lower - qtol,
     upper + qtol], or |velocity| > (1 + rtol) limit, or |acceleration| >
-    (1 + rtol) limit. The arm must also be at rest at the subtasks.
+    (1 + rtol) limit. When the arm has jerk limits, the jerk is checked by
+    finite differences: on the uniform grid t_k = k dt, |qdd(t_k+1) - qdd(t_k)| / dt
+    must stay within (1 + jtol) x the jerk limit (the difference quotient is the
+    mean jerk over the step, never above the largest one for a continuous
+    acceleration; an acceleration step shows up as a jerk of step / dt). The arm
+    must also be at rest at the subtasks.
+
+    Raises:
+        ParameterError: not a trajectory, a tolerance <= 0, dt outside
+            [MIN_DT, MAX_DT] or more than MAX_SAMPLES samples.
     """
     if not isinstance(trajectory, TourTrajectory):
         raise ParameterError(f"validate_trajectory needs a TourTrajectory, "
                              f"got {type(trajectory).__name__}")
-    require_positive("validate_trajectory", "dt", dt)
     require_positive("validate_trajectory", "rtol", rtol)
     require_positive("validate_trajectory", "qtol", qtol)
+    require_positive("validate_trajectory", "jtol", jtol)
+    n = _sample_count("validate_trajectory", trajectory.duration, dt)
     jl = trajectory.arm.joint_limits
-    t = np.union1d(np.arange(0.0, trajectory.duration, dt), trajectory._starts)
+    grid = np.arange(n + 1) * dt
+    grid = grid[grid <= trajectory.duration]
+    t = np.union1d(grid, trajectory._starts)
     q, qd, qdd = trajectory.states(t)
     vr = np.abs(qd) / jl.velocity
     ar = np.abs(qdd) / jl.acceleration
     margin = np.minimum(q - jl.lower, jl.upper - q)
-    violations = []
-    checks = [("position", margin < -qtol, lambda s, a: f"q{a + 1} = {q[s, a]:.6g} rad"),
-              ("velocity", vr > 1 + rtol, lambda s, a: f"|dq{a + 1}| = {vr[s, a]:.6g} x limit"),
-              ("acceleration", ar > 1 + rtol,
+    checks = [("position", t, margin < -qtol, lambda s, a: f"q{a + 1} = {q[s, a]:.6g} rad"),
+              ("velocity", t, vr > 1 + rtol,
+               lambda s, a: f"|dq{a + 1}| = {vr[s, a]:.6g} x limit"),
+              ("acceleration", t, ar > 1 + rtol,
                lambda s, a: f"|ddq{a + 1}| = {ar[s, a]:.6g} x limit")]
-    for name, bad, text in checks:
+    jerk_ratio = None
+    if jl.jerk is not None and len(grid) > 1:
+        on_grid = np.isin(t, grid)
+        jr = np.abs(np.diff(qdd[on_grid], axis=0)) / np.diff(t[on_grid])[:, None] / jl.jerk
+        jerk_ratio = tuple(float(v) for v in jr.max(axis=0))
+        checks.append(("jerk", t[on_grid], jr > 1 + jtol,
+                       lambda s, a: f"|dddq{a + 1}| = {jr[s, a]:.6g} x limit by finite "
+                                    f"differences at dt = {dt:g} s"))
+    violations = []
+    for name, times, bad, text in checks:
         hits = np.argwhere(bad)
         if hits.size:
             s, a = hits[0]
-            violations.append(f"{name} limit exceeded at t = {t[s]:.6g} s ({text(s, a)}; "
+            violations.append(f"{name} limit exceeded at t = {times[s]:.6g} s ({text(s, a)}; "
                               f"{len(hits)} samples)")
     rest = np.abs(qd[np.isin(t, trajectory._starts)]).max()
     if rest > 1e-6 * float(np.max(jl.velocity)):
@@ -361,11 +438,12 @@ def validate_trajectory(trajectory: TourTrajectory, *, dt: float = 1e-3,
     return ValidationReport(
         ok=not violations, n_samples=len(t), dt=float(dt), duration=trajectory.duration,
         predicted_time=trajectory.predicted_time,
-        max_velocity_ratio=tuple(float(v) for v in vr.max(axis=0)),
-        max_acceleration_ratio=tuple(float(v) for v in ar.max(axis=0)),
+        max_velocity_ratio=(float(vr[:, 0].max()), float(vr[:, 1].max())),
+        max_acceleration_ratio=(float(ar[:, 0].max()), float(ar[:, 1].max())),
         position_margin=float(margin.min()), violations=tuple(violations), rtol=float(rtol),
-        qtol=float(qtol))
+        qtol=float(qtol), max_jerk_ratio=jerk_ratio, jtol=float(jtol))
 
 
-__all__ = ["CSV_HEADER", "Leg", "TourTrajectory", "TrajectorySamples", "ValidationReport",
+__all__ = ["CSV_HEADER", "DEFAULT_JTOL", "DEFAULT_QTOL", "DEFAULT_RTOL", "Leg", "MAX_DT",
+           "MAX_SAMPLES", "MIN_DT", "TourTrajectory", "TrajectorySamples", "ValidationReport",
            "tour_trajectory", "validate_trajectory"]

@@ -76,10 +76,12 @@ def register(root: argparse._SubParsersAction) -> None:
     stop = p.add_argument_group("stopping (any criterion given stops the run)")
     stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
                       help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
-    stop.add_argument("--time-limit", "--max-runtime", dest="max_runtime", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
-                      metavar="SECONDS", help=f"at most this long, in (0, {MAX_RUNTIME_S:g}]")
+    stop.add_argument("--time-limit", "--max-runtime", dest="max_runtime",
+                      type=float_in(0.0, MAX_RUNTIME_S, open_low=True), metavar="SECONDS",
+                      help=f"stop after this long, in (0, {MAX_RUNTIME_S:g}]")
     stop.add_argument("--no-improvement", type=int_in(1, MAX_STALL), metavar="N",
-                      help=f"stop after N generations without a better tour, N in [1, {MAX_STALL}]")
+                      help=f"stop after N generations without a better tour, "
+                           f"N in [1, {MAX_STALL}]")
     stop.add_argument("--target", type=float_in(0.0, 1e12), metavar="SECONDS",
                       help="stop once the total time is at most this")
     out = p.add_argument_group("output")

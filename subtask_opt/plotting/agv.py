@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -12,12 +12,19 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from subtask_opt.planners.agv.quadtree import Quadtree
+    from subtask_opt.planners.agv.scenarios import SuiteReport
     from subtask_opt.planners.agv.simulation import AgvRun
 
 _OBSTACLE_COLOURS = ("C3", "C1", "C4", "C5", "C6", "C8")
 _EVENT_MARKERS = {"brake": ("v", "C3"), "wait": ("s", "C3"), "speed_up": ("^", "C2"),
                   "sidestep": ("D", "C1"), "static": ("X", "k"), "replan": ("P", "C4"),
-                  "recovery": ("*", "C2"), "collision": ("X", "r")}
+                  "recovery": ("*", "C2"), "check_point": ("+", "C9"), "blocked": ("x", "k"),
+                  "collision": ("X", "r")}
+_EVENT_LABELS = {"brake": "brake / stop", "wait": "wait", "speed_up": "speed up",
+                 "sidestep": "sidestep", "static": "obstacle taken as static",
+                 "replan": "re-plan", "recovery": "route recovered",
+                 "check_point": "check point (eq. 3)", "blocked": "blocked",
+                 "collision": "collision"}
 
 
 def _axes(ax: Axes | None, figsize: tuple[float, float] = (6, 6)) -> tuple[Figure, Axes]:
@@ -26,7 +33,7 @@ def _axes(ax: Axes | None, figsize: tuple[float, float] = (6, 6)) -> tuple[Figur
     if ax is None:
         fig, ax = plt.subplots(figsize=figsize)
         return fig, ax
-    return ax.figure, ax
+    return cast("Figure", ax.figure), ax
 
 
 def draw_grid(ax: Axes, occupancy: np.ndarray, extra: np.ndarray | None = None) -> None:
@@ -42,6 +49,8 @@ def draw_grid(ax: Axes, occupancy: np.ndarray, extra: np.ndarray | None = None) 
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_aspect("equal")
+    ax.set_xlabel("x (cells, 1 cell = 1 u = 10 px)")
+    ax.set_ylabel("y (cells, down as in the image)")
 
 
 def plot_quadtree(tree: Quadtree, occupancy: np.ndarray, *, path: np.ndarray | None = None,
@@ -58,10 +67,19 @@ def plot_quadtree(tree: Quadtree, occupancy: np.ndarray, *, path: np.ndarray | N
         fc = {BLACK: "0.15", GREY: "0.6"}.get(int(colour), "none")
         ax.add_patch(Rectangle((x0 - 0.5, y0 - 0.5), size, size, fc=fc, ec="C0", lw=0.5,
                                alpha=0.9 if fc != "none" else 1.0))
+    from matplotlib.patches import Patch
+
+    handles: list[Any] = [Patch(fc="white", ec="C0", label="white leaf (free)"),
+                          Patch(fc="0.15", ec="C0", label="black leaf (obstacle)")]
+    if tree.count(GREY):
+        handles.append(Patch(fc="0.6", ec="C0", label="grey leaf (mixed, finest size)"))
     if path is not None and len(path):
-        ax.plot(path[:, 0], path[:, 1], "-o", color="C3", ms=3, lw=1.5, label="path")
-        ax.legend(loc="upper right", fontsize=8)
-    ax.set_title(title or f"quadtree: {len(tree.leaves)} leaves, depth {tree.depth()}")
+        (line,) = ax.plot(path[:, 0], path[:, 1], "-o", color="C3", ms=3, lw=1.5,
+                          label="quadtree path")
+        handles.append(line)
+    ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)
+    ax.set_title(title or f"quadtree of the map: {len(tree.leaves)} leaves, "
+                          f"depth {tree.depth()}")
     return fig
 
 
@@ -79,39 +97,72 @@ def plot_local_states(states: np.ndarray, *, ax: Axes | None = None) -> Figure:
               extent=(-0.5, w - 0.5, h - 0.5, -0.5))
     ax.legend(handles=[Patch(fc=c, ec="0.5", label=f"{k:02b} {STATE_NAMES[k]}")
                        for k, c in enumerate(colours)], loc="upper right", fontsize=7)
-    ax.set_title("local map (b1 b2)")
+    ax.set_xlabel("x (cells)")
+    ax.set_ylabel("y (cells, down as in the image)")
+    ax.set_title("2-bit local map (b1 b2): only 00 cells are routable")
     return fig
 
 
 def plot_run(run: AgvRun, *, ax: Axes | None = None, corners: bool = True,
              title: str | None = None) -> Figure:
-    """Planned route, driven trajectory, obstacle tracks, and the events."""
-    fig, ax = _axes(ax)
+    """Planned route, driven trajectory (and the believed one under drift),
+    obstacle tracks with start and end, and the events where they happened."""
+    fig, ax = _axes(ax, (7, 7))
     draw_grid(ax, run.world.occupancy, run.static_cells)
     if corners:
-        from subtask_opt.planners.agv.simulation import near_points
+        from subtask_opt.planners.agv.navigation import near_points
 
         pts = near_points(run.world.occupancy)
         if len(pts):
-            ax.plot(pts[:, 0], pts[:, 1], ".", color="0.6", ms=3, label="near points")
+            ax.plot(pts[:, 0], pts[:, 1], ".", color="0.55", ms=3,
+                    label="near points (corner sub-goals)")
+    if run.static_cells.any():
+        ax.plot([], [], "s", color=(0.65, 0.45, 0.3), ms=9,
+                label="cells of an obstacle taken as static")
     r = run.planned_route
-    ax.plot(r[:, 0], r[:, 1], "--o", color="C0", lw=1, ms=4, alpha=0.7, label="planned route")
+    ax.plot(r[:, 0], r[:, 1], "--o", color="C0", lw=1.4, ms=4, alpha=0.9, zorder=4,
+            label="planned route (sub-goals)")
     tr = run.trajectory
-    ax.plot(tr[:, 0], tr[:, 1], "-", color="C2", lw=2, label="AGV")
+    ax.plot(tr[:, 0], tr[:, 1], "-", color="C2", lw=3.5, alpha=0.6, label="AGV (driven)")
+    if run.params.drift:
+        b = run.believed
+        ax.plot(b[:, 0], b[:, 1], ":", color="k", lw=1.2,
+                label="AGV (believed, odometry)")
     for j, track in enumerate(run.obstacle_positions):
         c = _OBSTACLE_COLOURS[j % len(_OBSTACLE_COLOURS)]
-        ax.plot(track[:, 0], track[:, 1], "-", color=c, lw=1, alpha=0.7)
-        ax.plot(track[-1, 0], track[-1, 1], "o", color=c, ms=6)
+        ax.plot(track[:, 0], track[:, 1], "-", color=c, lw=1.2, alpha=0.8,
+                label=f"obstacle {j} track")
+        ax.plot(track[0, 0], track[0, 1], ">", color=c, ms=6, mec="k", mew=0.4)
+        ax.plot(track[-1, 0], track[-1, 1], "o", color=c, ms=7, mec="k", mew=0.4)
+    used: dict[tuple[int, int], int] = {}  # events at one place are stacked upwards
     for kind, (marker, colour) in _EVENT_MARKERS.items():
         ev = [e for e in run.events if e.kind == kind]
         if ev:
             xy = np.array([_at(run, e.time) for e in ev])
-            ax.plot(xy[:, 0], xy[:, 1], marker, color=colour, ms=8, mec="k", mew=0.5,
-                    label=kind, ls="none")
-    ax.plot(*tr[0], "s", color="C0", ms=8)
-    ax.plot(*r[-1], "*", color="gold", mec="k", ms=14)
-    ax.legend(loc="lower right", fontsize=7, framealpha=0.8)
-    ax.set_title(title or f"{run.scenario}: {run.outcome} in {run.time_s:.1f} s")
+            for i, (x, y) in enumerate(xy):
+                key = (int(round(x)), int(round(y)))
+                if kind != "check_point":
+                    xy[i, 1] = y - 0.9 * used.get(key, 0)
+                    used[key] = used.get(key, 0) + 1
+            ax.plot(xy[:, 0], xy[:, 1], marker, color=colour, ms=9, mec="k", mew=0.6,
+                    label=_EVENT_LABELS[kind], ls="none")
+    ax.plot(*tr[0], "s", color="C0", ms=9, mec="k", ls="none", label="start")
+    ax.plot(*r[-1], "*", color="gold", mec="k", ms=15, ls="none", label="goal")
+    n_obs = len(run.obstacle_positions)
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, framealpha=0.9,
+              title="obstacles: > start, o end" if n_obs else None, title_fontsize=7)
+    if title is None:
+        p = run.params
+        opts = [f"t-second check {'on' if p.collision_check else 'OFF'}"]
+        if p.drift:
+            opts.append(f"drift on (seed {run.seed}), check points "
+                        f"{'on' if p.check_points else 'off'}")
+        delay = f", delay {run.delay_s:.1f} s" if run.success else ""
+        obs = (f"{n_obs} moving obstacle(s), AGV at {p.v_nominal:g} u/s" if n_obs
+               else f"static obstacles only, AGV at {p.v_nominal:g} u/s")
+        title = (f"AGV scenario {run.scenario}: {run.outcome.value} at t = {run.time_s:.1f} s"
+                 f"{delay}\n{', '.join(opts)}; {obs}")
+    ax.set_title(title, fontsize=10)
     return fig
 
 
@@ -146,13 +197,17 @@ def animate_run(run: AgvRun, out: str | Path, *, fps: int = 10, max_frames: int 
     ax.plot(r[:, 0], r[:, 1], "--", color="C0", lw=1, alpha=0.6)
     ax.plot(*r[-1], "*", color="gold", mec="k", ms=14)
     radius = run.params.collision_distance / 2
-    (trail,) = ax.plot([], [], "-", color="C2", lw=2)
-    agv = ax.add_patch(Circle(tuple(run.trajectory[0]), radius, fc="C2", ec="k"))
-    obs = [ax.add_patch(Circle(tuple(p[0]), radius, fc=_OBSTACLE_COLOURS[j % 6], ec="k"))
-           for j, p in enumerate(run.obstacle_positions)]
+    (trail,) = ax.plot([], [], "-", color="C2", lw=2, label="AGV")
+    agv = Circle(tuple(run.trajectory[0]), radius, fc="C2", ec="k")
+    ax.add_patch(agv)
+    obs = [Circle(tuple(p[0]), radius, fc=_OBSTACLE_COLOURS[j % 6], ec="k",
+                  label=f"obstacle {j}") for j, p in enumerate(run.obstacle_positions)]
+    for c in obs:
+        ax.add_patch(c)
+    ax.legend(loc="upper right", fontsize=7)
     text = ax.text(0.01, 0.01, "", transform=ax.transAxes, fontsize=8, va="bottom",
                    bbox={"fc": "white", "alpha": 0.8, "ec": "none"})
-    ax.set_title(f"{run.scenario}: {run.outcome} in {run.time_s:.1f} s")
+    ax.set_title(f"AGV scenario {run.scenario}: {run.outcome.value} in {run.time_s:.1f} s")
 
     def update(i: int) -> list[Any]:
         t = run.times[i]
@@ -174,9 +229,107 @@ def animate_run(run: AgvRun, out: str | Path, *, fps: int = 10, max_frames: int 
 
 
 def save_run_figure(run: AgvRun, path: str | Path) -> None:
-    """:func:`plot_run` written to ``path``."""
+    """:func:`plot_run` beside the speed profile, written to ``path``."""
     import matplotlib.pyplot as plt
 
-    fig = plot_run(run)
-    fig.savefig(path, dpi=120, bbox_inches="tight")
+    fig = plt.figure(figsize=(13, 7))
+    grid = fig.add_gridspec(2, 2, width_ratios=(1.45, 1), height_ratios=(1, 1))
+    plot_run(run, ax=fig.add_subplot(grid[:, 0]))
+    ax = fig.add_subplot(grid[0, 1])
+    ax.plot(run.times, run.speeds, color="C2", label="AGV speed")
+    ax.axhline(run.params.v_nominal, color="0.5", ls="--", lw=1, label="normal speed")
+    for e in run.events:
+        if e.kind in _EVENT_MARKERS and e.kind != "check_point":
+            ax.axvline(e.time, color=_EVENT_MARKERS[e.kind][1], lw=0.8, alpha=0.6)
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("speed (cells/s = u/s)")
+    ax.set_title("speed; vertical lines: events (colours as in the map)", fontsize=9)
+    ax.legend(fontsize=8, loc="lower right")
+    ax2 = fig.add_subplot(grid[1, 1])
+    if len(run.obstacle_positions):
+        d = run.obstacle_positions - run.trajectory[None, :, :]
+        sep = np.hypot(d[..., 0], d[..., 1]).min(axis=0)
+        ax2.plot(run.times, sep, color="C3", label="nearest obstacle")
+        ax2.axhline(run.params.safety_distance, color="C1", ls="--", lw=1,
+                    label="safety distance (factor D)")
+        ax2.axhline(run.params.collision_distance, color="r", ls=":", lw=1,
+                    label="collision distance")
+        ax2.set_ylim(0, min(float(sep.max()) + 1, 20))
+        ax2.set_ylabel("separation (cells)")
+        ax2.set_title("distance to the nearest moving obstacle", fontsize=9)
+    else:
+        ax2.plot(run.times, run.drift_error, color="k", label="|true - believed|")
+        ax2.set_ylabel("position error (cells)")
+        ax2.set_title("odometry position error", fontsize=9)
+    ax2.set_xlabel("time (s)")
+    ax2.legend(fontsize=8, loc="upper right")
+    fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+def plot_suite(report: SuiteReport) -> Figure:
+    """Three panels of a random suite: outcomes, delays, and the drift error
+    per run with and without check points."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
+    ax = axes[0]
+    names = ["success", "collision", "timeout", "no_path"]
+    counts = [sum(o == n for o in report.outcomes) for n in names]
+    x = np.arange(len(names))
+    ax.bar(x - 0.2 if report.drift else x, counts, width=0.4, color="C2",
+           label="with check points" if report.drift else "runs")
+    if report.drift:
+        bare = [report.success_no_check, report.collisions_no_check]
+        ax.bar(x[:2] + 0.2, bare, width=0.4, color="C7", label="without check points")
+    ax.set_xticks(x, names)
+    ax.set_ylabel("runs")
+    ax.set_xlabel("outcome")
+    ax.set_title("outcomes", fontsize=10)
+    ax.legend(fontsize=8)
+    ax = axes[1]
+    delays = np.array([d for d in report.delays if np.isfinite(d)])
+    if len(delays):
+        ax.hist(delays, bins=20, color="C0", label=f"successful runs ({len(delays)})")
+        ax.axvline(float(delays.mean()), color="k", ls="--",
+                   label=f"mean {delays.mean():.2f} s")
+    ax.set_xlabel("delay: arrival minus obstacle-free arrival (s)")
+    ax.set_ylabel("runs")
+    ax.set_title("delay caused by the moving obstacles", fontsize=10)
+    ax.legend(fontsize=8)
+    ax = axes[2]
+    if report.drift and report.drift_errors_no_check:
+        a = np.array(report.drift_errors)
+        b = np.array(report.drift_errors_no_check)
+        bins = np.linspace(0, max(float(a.max()), float(b.max())) + 1e-9, 25)
+        ax.hist(b, bins=bins, color="C7", alpha=0.7,
+                label=f"without check points (mean {b.mean():.2f})")
+        ax.hist(a, bins=bins, color="C2", alpha=0.7,
+                label=f"with check points (mean {a.mean():.2f})")
+        ax.set_xlabel("mean |true - believed position| of a run (cells)")
+        ax.set_ylabel("runs")
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "drift off: no position error", ha="center", va="center",
+                transform=ax.transAxes)
+        ax.set_xlabel("position error (cells)")
+        ax.set_ylabel("runs")
+    ax.set_title("odometry drift error per run", fontsize=10)
+    check = "on" if report.collision_check else "OFF"
+    drift = "on" if report.drift else "off"
+    fig.suptitle(f"AGV random suite: {report.runs} runs from seed {report.seed} "
+                 f"(t-second check {check}, odometry drift {drift})", fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def save_suite_figure(report: SuiteReport, path: str | Path) -> None:
+    """:func:`plot_suite` written to ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig = plot_suite(report)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
     plt.close(fig)

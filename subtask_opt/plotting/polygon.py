@@ -1,8 +1,9 @@
 """Figures of polygon worlds: obstacles, MAKLINK links and cells, the graph, paths.
 
-``draw_*`` functions draw onto a given axes; :func:`figure` builds a whole
-figure (the paper's Figs. 1-4 in one panel or several) and :func:`save`
-writes one to a file.
+``draw_*`` functions draw onto a given axes; :func:`figure` builds a one-panel
+map (the paper's Figs. 1-4), :func:`planner_figure` a map plus the PSO
+convergence (gap to the exact optimum, log scale), and :func:`save` writes a
+figure to a file. World coordinates are in metres, as in the seed paper.
 """
 
 from __future__ import annotations
@@ -18,11 +19,13 @@ if TYPE_CHECKING:
     from subtask_opt.planners.polygon.maklink import MaklinkGraph
     from subtask_opt.planners.polygon.world import PolygonWorld
 
-_PATH_STYLES = {
+# Overlapping paths stay distinguishable: the optimum is a wide translucent band
+# under the others, which are thinner and dashed differently.
+_PATH_STYLES: dict[str, dict[str, Any]] = {
     "dijkstra": dict(color="tab:orange", ls="--", lw=1.6),
-    "improved_dijkstra": dict(color="tab:green", ls="-.", lw=1.6),
-    "pso": dict(color="tab:red", ls="-", lw=2.0),
-    "visibility": dict(color="black", ls=":", lw=1.8),
+    "improved": dict(color="tab:green", ls="-.", lw=1.6),
+    "pso": dict(color="tab:red", ls="-", lw=1.4),
+    "visibility": dict(color="tab:purple", ls="-", lw=6.0, alpha=0.3, solid_capstyle="round"),
 }
 
 
@@ -57,9 +60,9 @@ def draw_links(ax: Any, graph: MaklinkGraph, *, cells: bool = False) -> None:
         cmap = _cmap()
         for i, cell in enumerate(graph.cells):
             ax.add_patch(Polygon(cell, closed=True, fc=cmap(i % 20), alpha=0.25, lw=0, zorder=0))
-    segs = graph.links.reshape(-1, 2, 2)
-    ax.add_collection(LineCollection(segs, colors="tab:blue", lw=0.9, zorder=1,
-                                     label="free links"))
+    segs = list(graph.links.reshape(-1, 2, 2))
+    ax.add_collection(LineCollection(segs, colors="tab:blue", lw=0.9, zorder=1, alpha=0.7,
+                                     label="MAKLINK free links"))
 
 
 def draw_graph(ax: Any, graph: MaklinkGraph, start: Any = None, goal: Any = None) -> None:
@@ -117,28 +120,74 @@ def figure(world: PolygonWorld, *, graph: MaklinkGraph | None = None,
     for name, res in (results or {}).items():
         if res.success:
             style = _PATH_STYLES.get(res.planner, {})
-            draw_path(ax, res.path, label=f"{name} ({res.length:.2f})", **style)
+            draw_path(ax, res.path, label=f"{name}: {res.length:.2f} m", **style)
+        else:
+            ax.plot([], [], " ", label=f"{name}: no path")
     if results or graph is not None:
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.07), ncol=3, fontsize=8,
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=8,
                   frameon=False)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
     ax.set_title(title or world.name)
     return fig
 
 
-def convergence(history_best: np.ndarray, optimum: float | None = None, ax: Any = None) -> Any:
-    """PSO best length per iteration, with the exact optimum as a reference line."""
+def convergence(history_best: np.ndarray, optimum: float | None = None, ax: Any = None,
+                history_mean: np.ndarray | None = None, label: str = "PSO") -> Any:
+    """PSO length per iteration as the gap to the exact optimum in percent, log scale.
+
+    Without a (positive, finite) optimum the gap is taken to the final best
+    length instead, and the axis says so. Gaps below 1e-6 % are drawn at 1e-6 %.
+    """
     import matplotlib.pyplot as plt
 
     if ax is None:
         fig, ax = plt.subplots(figsize=(6, 3.2))
     else:
         fig = ax.figure
-    ax.plot(np.arange(1, len(history_best) + 1), history_best, color="tab:red", label="PSO best")
-    if optimum is not None:
-        ax.axhline(optimum, color="black", ls=":", label=f"optimum {optimum:.4f}")
+    best = np.asarray(history_best, dtype=float)
+    exact = optimum is not None and bool(np.isfinite(optimum)) and optimum > 0
+    ref = optimum if optimum is not None and exact else (float(best[-1]) if len(best) else 1.0)
+    floor = 1e-6
+    it = np.arange(1, len(best) + 1)
+    ax.semilogy(it, np.maximum(100.0 * (best / ref - 1.0), floor), color="tab:red",
+                label=f"{label} best")
+    if history_mean is not None and len(history_mean):
+        ax.semilogy(it, np.maximum(100.0 * (np.asarray(history_mean) / ref - 1.0), floor),
+                    color="tab:red", ls=":", alpha=0.7, label=f"{label} swarm mean")
     ax.set_xlabel("iteration")
-    ax.set_ylabel("path length")
-    ax.legend()
+    ax.set_ylabel(("gap to optimum [%]" if exact else "gap to final best [%]")
+                  + f" (floor {floor:g})")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return fig
+
+
+def planner_figure(world: PolygonWorld, results: Mapping[str, PlanResult], *,
+                   optimum: float | None = None, graph: MaklinkGraph | None = None,
+                   title: str = "") -> Any:
+    """The map with every path and, when a result has a PSO history, its convergence.
+
+    Returns the matplotlib Figure (one panel without a history: no empty panels).
+    """
+    import matplotlib.pyplot as plt
+
+    histories = [(name, r) for name, r in results.items()
+                 if r.history is not None and r.history.generations > 0]
+    if histories:
+        fig, (ax_map, ax_conv) = plt.subplots(
+            1, 2, figsize=(11.5, 6.2), gridspec_kw={"width_ratios": [1.0, 0.9]})
+    else:
+        fig, ax_map = plt.subplots(figsize=(6.2, 6.6))
+    figure(world, graph=graph, results=results, title=title or world.name, ax=ax_map)
+    if histories:
+        name, res = histories[0]
+        h = res.history
+        assert h is not None
+        convergence(h.best_cost, optimum, ax=ax_conv, history_mean=h.mean_cost, label=name)
+        ax_conv.set_title(f"{name} convergence ({h.generations} iterations, "
+                          f"seed {res.info.get('seed', '-')})")
+    fig.tight_layout()
     return fig
 
 

@@ -29,6 +29,14 @@ def _arm(name: str):
     return _ARMS[name]
 
 
+def _no_jerk(name: str):
+    """The robot without jerk limits: its lines are the acceleration-limited optimum."""
+    arm = _arm(name)
+    jl = arm.joint_limits
+    return load_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
+                                                   jl.acceleration))
+
+
 def _slack_joints(name: str, kw: float = 1e6):
     """The robot with joint limits far above anything the Cartesian limits need."""
     arm = _arm(name)
@@ -78,7 +86,7 @@ def _toppra_time(arm, p0, p1, branch) -> float:
 @pytest.mark.parametrize("robot", ["planar_2r", "asr_twodof"])
 def test_line_matches_toppra_on_random_legs(robot: str) -> None:
     pytest.importorskip("toppra")
-    arm = _arm(robot)
+    arm = _no_jerk(robot)  # toppra has no jerk limits
     s = random_subtasks(arm, 6, seed=11)
     res = travel_times(s, arm, "line")
     moves = res.moves()
@@ -103,7 +111,7 @@ def test_line_is_never_faster_than_the_joint_optimum() -> None:
 
 
 def test_line_converges_with_the_grid() -> None:
-    arm = _arm("planar_2r")
+    arm = _no_jerk("planar_2r")
     s = random_subtasks(arm, 5, seed=2)
     coarse = travel_times(s, arm, "line", line_grid=128).branch_times
     fine = travel_times(s, arm, "line", line_grid=2048).branch_times
@@ -149,11 +157,11 @@ def test_line_through_the_inner_disc_is_reported_and_replaced_or_excluded() -> N
             solve(problem, seed=0)
     # the fallback drives it as a joint move and says so
     result = solve(SequencingProblem(s, arm, time_model="line"), seed=0)
-    assert "joint" in result.leg_moves
-    report = result.infeasible_legs
-    assert report["n_infeasible_lines"] >= 1
-    assert any(leg["reason"] == "leaves the reachable annulus"
-               for leg in report["tour_legs_not_straight"])
+    report = result.report
+    assert report is not None and "joint" in report.leg_moves
+    assert report.diagnostics["all_pairs_lines"]["n_infeasible_lines"] >= 1
+    assert any("leaves the reachable annulus" in note
+               for leg in report.infeasible for note in leg.notes)
 
 
 def test_line_past_a_joint_limit_is_reported() -> None:
@@ -183,3 +191,57 @@ def test_missing_or_non_positive_limits_are_rejected() -> None:
         JointLimits([-1, -1], [1, 1], None, [1, 1])
     with pytest.raises(ParameterError, match="kv"):
         CartesianLimits(-0.1, 1.0, 1.0, 1.0)
+
+
+def test_third_path_derivatives_match_finite_differences() -> None:
+    # the oracle: IK along the line, differentiated numerically
+    from subtask_opt.arm.timing import _line_kernels as lk
+
+    arm = _arm("planar_2r")
+    s = random_subtasks(arm, 6, seed=4)
+    checked = 0
+    for i in range(5):
+        p0, p1 = s.points[i], s.points[i + 1]
+        d = float(np.hypot(*(p1 - p0)))
+        u = (p1 - p0) / d
+        branch = int(np.isnan(arm.ik(p0)[0, 0]))
+        if np.isnan(arm.ik(p1)[branch, 0]):
+            continue
+        sm = 0.5 * d
+        h = 1e-3 * d
+        q = arm.ik(np.array([p0 + (sm + k * h) * u for k in (-2, -1, 0, 1, 2)]))[:, branch]
+        if np.isnan(q).any():
+            continue
+        q = np.unwrap(q, axis=0)
+        der = np.empty(lk.N_DER)
+        assert lk.path_derivatives(arm.kinematics, q[2, 0], q[2, 1], u[0], u[1], der)
+        third = (q[4] - 2 * q[3] + 2 * q[1] - q[0]) / (2 * h ** 3)
+        second = (q[3] - 2 * q[2] + q[1]) / h ** 2
+        np.testing.assert_allclose(der[2:4], second, rtol=1e-4, atol=1e-6)
+        np.testing.assert_allclose(der[6:8], third, rtol=1e-3, atol=1e-4 * np.abs(third).max())
+        checked += 1
+    assert checked >= 2
+
+
+def test_jerk_limited_line_bounds() -> None:
+    # with jerk limits a line is never faster than without them (same path, more limits),
+    # nor than the joint model's per-joint jerk-limited optimum (a lower bound of any move)
+    arm = _arm("planar_2r")
+    assert arm.joint_limits.jerk is not None
+    s = random_subtasks(arm, 6, seed=7)
+    jerk = travel_times(s, arm, "line", line_fallback="exclude").branch_times
+    acc = travel_times(s, _no_jerk("planar_2r"), "line", line_fallback="exclude").branch_times
+    joint = travel_times(s, arm, "joint").branch_times
+    ok = np.isfinite(jerk) & (jerk > 0)
+    assert ok.sum() >= 10
+    np.testing.assert_array_equal(np.isfinite(jerk), np.isfinite(acc))
+    assert np.all(jerk[ok] >= acc[ok] * (1 - 1e-3))
+    assert np.all(jerk[ok] >= joint[ok] * (1 - 1e-9))
+    assert np.all(jerk[ok] > acc[ok] * 1.01)  # the jerk limits of planar_2r do bind
+
+
+def test_line_limits_reject_a_bad_grid() -> None:
+    from subtask_opt.arm.timing.models import line_limits
+
+    with pytest.raises(ParameterError, match="grid"):
+        line_limits(_arm("planar_2r"), 8)

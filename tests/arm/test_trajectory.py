@@ -46,6 +46,11 @@ def test_every_tour_executes_within_the_limits(robot: str, case: str, model: str
     report = validate_trajectory(trajectory, dt=2e-3)
     assert report.ok, report.violations
     assert max(report.max_velocity_ratio) <= 1 + report.rtol
+    if problem.arm.joint_limits.jerk is None:
+        assert report.max_jerk_ratio is None and "jerk not checked" in report.summary()
+    else:  # jerk checked by finite differences, on every kind of leg
+        assert report.max_jerk_ratio is not None
+        assert max(report.max_jerk_ratio) <= 1 + report.jtol
     assert report.position_margin >= -report.qtol
     if model in ("joint", "line"):  # executed as timed: the promised time, to round-off
         assert trajectory.duration == pytest.approx(result.total_time, rel=1e-6)
@@ -59,7 +64,7 @@ def test_every_tour_executes_within_the_limits(robot: str, case: str, model: str
         np.testing.assert_allclose(q[0], leg.q_from, atol=1e-9)
         np.testing.assert_allclose(qd[0], 0.0, atol=1e-6)
         np.testing.assert_allclose(_arm(robot).fk(q[0])[:2], pts[leg.from_subtask], atol=1e-9)
-        assert leg.from_config == result.configurations[leg.from_subtask]
+        assert leg.from_config == result.report.configurations[leg.from_subtask]
 
 
 def test_joint_moves_are_jerk_limited_when_the_arm_has_jerk_limits() -> None:
@@ -73,8 +78,9 @@ def test_joint_moves_are_jerk_limited_when_the_arm_has_jerk_limits() -> None:
     assert arm.joint_limits.jerk is None  # asr_twodof: trapezoids, acceleration steps allowed
 
 
-def test_line_legs_follow_the_straight_line_and_are_consistent() -> None:
-    problem, result = _solved("asr_twodof", "random30", "line")
+@pytest.mark.parametrize("robot", ["asr_twodof", "planar_2r"])
+def test_line_legs_follow_the_straight_line_and_are_consistent(robot: str) -> None:
+    problem, result = _solved(robot, "random30", "line")
     trajectory = tour_trajectory(problem, result)
     legs = [leg for leg in trajectory.legs if leg.kind == "line"]
     assert legs
@@ -92,6 +98,9 @@ def test_line_legs_follow_the_straight_line_and_are_consistent() -> None:
         h = t[1] - t[0]
         np.testing.assert_allclose((q[2:] - q[:-2]) / (2 * h), qd[1:-1], atol=2e-3 * np.max(
             arm.joint_limits.velocity))
+        if arm.joint_limits.jerk is not None:  # accelerations too: they are continuous
+            np.testing.assert_allclose((qd[2:] - qd[:-2]) / (2 * h), qdd[1:-1],
+                                       atol=2e-2 * np.max(arm.joint_limits.acceleration))
         # tip speed within Kv
         v = np.linalg.norm(np.array([arm.jacobian(qk) @ qdk for qk, qdk in zip(q, qd,
                                                                               strict=True)]),
@@ -123,6 +132,57 @@ def test_non_positive_dt_is_rejected(dt: float) -> None:
         trajectory.sample(dt)
     with pytest.raises(ParameterError, match="dt"):
         validate_trajectory(trajectory, dt=dt)
+
+
+def test_validator_catches_the_jerk_of_an_acceleration_limited_tour() -> None:
+    # the same tour driven without jerk limits (acceleration steps) breaks planar_2r's jerk
+    # limits; the validator must see it, and the jerk-limited trajectory must pass
+    arm = _arm("planar_2r")
+    jl = arm.joint_limits
+    free = load_arm("planar_2r", joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
+                                                          jl.acceleration))
+    problem, result = _solved("planar_2r", "square20", "line")
+    free_problem = SequencingProblem(problem.subtasks, free, time_model="line",
+                                     configurations="optimize")
+    free_result = solve(free_problem, seed=0)
+    jerky = tour_trajectory(free_problem, free_result)
+    judged = TourTrajectory(arm, jerky.legs, jerky.predicted_time, "line")
+    report = validate_trajectory(judged, dt=1e-3)
+    assert not report.ok
+    assert any(v.startswith("jerk limit exceeded") for v in report.violations)
+    assert report.max_jerk_ratio is not None and max(report.max_jerk_ratio) > 10
+    smooth = validate_trajectory(tour_trajectory(problem, result), dt=1e-3)
+    assert smooth.ok, smooth.violations
+    # honouring jerk costs time
+    assert tour_trajectory(problem, result).duration > jerky.duration
+
+
+@pytest.mark.parametrize("dt", [1e-9, 1e-7, 11.0])
+def test_sampling_step_outside_the_range_is_rejected_before_allocating(dt: float) -> None:
+    from subtask_opt.arm.trajectory import MAX_DT, MIN_DT
+
+    problem, result = _solved("asr_twodof", "square20", "joint")
+    trajectory = tour_trajectory(problem, result)
+    with pytest.raises(ParameterError, match=r"dt must be in \[") as err:
+        trajectory.sample(dt)
+    assert f"{MIN_DT:g}" in str(err.value) and f"{MAX_DT:g}" in str(err.value)
+    with pytest.raises(ParameterError, match="dt"):
+        validate_trajectory(trajectory, dt=dt)
+
+
+def test_too_many_samples_are_refused_with_the_estimate(monkeypatch) -> None:
+    from subtask_opt.arm import trajectory as tr
+
+    problem, result = _solved("asr_twodof", "square20", "joint")
+    trajectory = tour_trajectory(problem, result)
+    monkeypatch.setattr(tr, "MAX_SAMPLES", 1000)
+    dt = trajectory.duration / 5000  # about 5000 samples
+    with pytest.raises(ParameterError, match="limit of 1e[+]03") as err:
+        trajectory.sample(dt)
+    assert "5e+03 samples" in str(err.value)
+    with pytest.raises(ParameterError, match="samples"):
+        trajectory.to_csv("never_written.csv", dt)
+    assert len(trajectory.sample(trajectory.duration / 900).t) <= 1000
 
 
 def test_validator_reports_exceeded_limits() -> None:

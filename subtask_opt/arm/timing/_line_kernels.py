@@ -31,6 +31,7 @@ limits force the arm to stop.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -55,6 +56,8 @@ from subtask_opt.arm._kinematics_kernels import (
 LINE_OK, LINE_ANNULUS, LINE_JOINT_LIMIT, LINE_SINGULAR = 0, 1, 2, 3
 # |sin(elbow angle)| below this is a singular configuration (the rim or the inner disc).
 _SINGULAR = 1e-9
+# Entries of a path-derivative row (see :func:`path_derivatives`).
+N_DER = 9
 # Slack on joint limits and on matching the goal configuration (rad).
 _QTOL = 1e-7
 
@@ -80,10 +83,11 @@ def path_grid(d, m):
 
 @njit(cache=True)
 def path_derivatives(kin, q1, q2, ux, uy, out):
-    """d/ds and d2/ds2 of the joints and of the tool angle along direction (ux, uy).
+    """d/ds, d2/ds2 and d3/ds3 of the joints and the tool angle along direction (ux, uy).
 
     Writes ``out[0:2] = q'``, ``out[2:4] = q''``, ``out[4] = phi'``,
-    ``out[5] = phi''``; returns False at a singular configuration.
+    ``out[5] = phi''``, ``out[6:8] = q'''``, ``out[8] = phi'''`` (:data:`N_DER`
+    values); returns False at a singular configuration.
     """
     l1 = kin[K_L1]
     l2 = kin[K_L2]
@@ -104,12 +108,22 @@ def path_derivatives(kin, q1, q2, ux, uy, out):
     cy = -l1 * s1 * d1 * d1 - l2 * s12 * d12 * d12
     dd1 = -(l2 * c12 * cx + l2 * s12 * cy) / det
     dd12 = -(-l1 * c1 * cx - l1 * s1 * cy) / det
+    # p''' = 0 = A (th1''', th12''') + c3
+    cx3 = (l1 * s1 * d1 ** 3 - 3.0 * l1 * c1 * d1 * dd1
+           + l2 * s12 * d12 ** 3 - 3.0 * l2 * c12 * d12 * dd12)
+    cy3 = (-l1 * c1 * d1 ** 3 - 3.0 * l1 * s1 * d1 * dd1
+           - l2 * c12 * d12 ** 3 - 3.0 * l2 * s12 * d12 * dd12)
+    ddd1 = -(l2 * c12 * cx3 + l2 * s12 * cy3) / det
+    ddd12 = -(-l1 * c1 * cx3 - l1 * s1 * cy3) / det
     out[0] = kin[K_S1] * d1
     out[1] = kin[K_S2] * (d12 - d1)
     out[2] = kin[K_S1] * dd1
     out[3] = kin[K_S2] * (dd12 - dd1)
     out[4] = d12
     out[5] = dd12
+    out[6] = kin[K_S1] * ddd1
+    out[7] = kin[K_S2] * (ddd12 - ddd1)
+    out[8] = ddd12
     return True
 
 
@@ -136,7 +150,7 @@ def line_geometry(kin, p0, p1, branch, q_start, q_end, m):
     The joints start at ``q_start`` and must arrive at ``q_end`` (both on ``branch``).
     """
     qs = np.zeros((m + 1, 2))
-    der = np.zeros((m + 1, 6))
+    der = np.zeros((m + 1, N_DER))
     dx = p1[0] - p0[0]
     dy = p1[1] - p0[1]
     d = math.sqrt(dx * dx + dy * dy)
@@ -268,23 +282,277 @@ def topp_profile(der, sg, vel, acc, kv, ka, kw, kw_dot):
     return True, x, w, duration
 
 
+class LineLimits(NamedTuple):
+    """Kernel parameters of a straight-line move: the limits and the search settings.
+
+    ``vel``, ``acc``, ``jerk`` are the (2,) joint limits (``jerk`` is ignored
+    unless ``has_jerk``); ``kv``, ``ka``, ``kw``, ``kw_dot`` the Cartesian
+    ones; ``grid`` the number M of path intervals. With jerk limits the
+    acceleration-limited profile is smoothed by a moving average of width tau
+    and slowed down uniformly until every limit holds (:func:`line_profile`);
+    tau is searched on ``n_tau`` log-spaced values in
+    [``tau_min``, ``tau_max``] x (unsmoothed duration), refined by
+    ``n_golden`` golden-section steps. ``margin`` is the relative slack added
+    to the slow-down factor (covers the limits between the checked instants).
+    """
+
+    vel: np.ndarray
+    acc: np.ndarray
+    jerk: np.ndarray
+    kv: float
+    ka: float
+    kw: float
+    kw_dot: float
+    has_jerk: bool
+    grid: int
+    n_tau: int
+    n_golden: int
+    tau_min: float
+    tau_max: float
+    margin: float
+
+
 @njit(cache=True)
-def line_time(kin, p0, p1, branch, q_start, q_end, vel, acc, kv, ka, kw, kw_dot, m):
-    """``(status, duration)`` of the time-optimal straight move p0 -> p1 on ``branch``."""
-    st, sg, qs, der = line_geometry(kin, p0, p1, branch, q_start, q_end, m)
+def profile_knots(sg, x, w):
+    """Times ``tk`` (M+1,) at the grid points and integrals ``sk`` of s(t) up to them."""
+    m = w.shape[0]
+    tk = np.zeros(m + 1)
+    sk = np.zeros(m + 1)
+    for i in range(m):
+        v0 = math.sqrt(x[i])
+        h = 2.0 * (sg[i + 1] - sg[i]) / (v0 + math.sqrt(x[i + 1]))
+        tk[i + 1] = tk[i] + h
+        sk[i + 1] = sk[i] + sg[i] * h + 0.5 * v0 * h * h + w[i] * h * h * h / 6.0
+    return tk, sk
+
+
+@njit(cache=True)
+def _locate(tk, t, i):
+    """Index of the interval of ``tk`` holding t, searched from the guess i."""
+    m = tk.shape[0] - 1
+    while i < m - 1 and t >= tk[i + 1]:
+        i += 1
+    while i > 0 and t < tk[i]:
+        i -= 1
+    return i
+
+
+@njit(cache=True)
+def _raw_state(t, i, sg, x, w, tk, sk):
+    """s, s_dot, s_ddot and the integral of s at time t of the unsmoothed profile.
+
+    At rest at s = 0 before t = 0 and at s = d after the end.
+    """
+    m = w.shape[0]
+    if t <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    if t >= tk[m]:
+        return sg[m], 0.0, 0.0, sk[m] + sg[m] * (t - tk[m])
+    h = t - tk[i]
+    v0 = math.sqrt(x[i])
+    s = min(sg[i] + v0 * h + 0.5 * w[i] * h * h, sg[m])
+    integral = sk[i] + sg[i] * h + 0.5 * v0 * h * h + w[i] * h * h * h / 6.0
+    return s, max(v0 + w[i] * h, 0.0), w[i], integral
+
+
+@njit(cache=True)
+def _smoothed(t, tau, ia, ib, sg, x, w, tk, sk):
+    """(f, f', f'', f''', ia, ib): the profile averaged over [t - tau, t] (tau = 0: itself).
+
+    Averaging a rest-to-rest profile keeps it rest to rest with zero end
+    accelerations and makes its acceleration continuous: f''' is the
+    difference of the accelerations at t and t - tau over tau.
+    """
+    ia = _locate(tk, t, ia)
+    sa, va, aa, ia_int = _raw_state(t, ia, sg, x, w, tk, sk)
+    if tau <= 0.0:
+        return sa, va, aa, 0.0, ia, ib
+    ib = _locate(tk, t - tau, ib)
+    sb, vb, ab, ib_int = _raw_state(t - tau, ib, sg, x, w, tk, sk)
+    f = min(max((ia_int - ib_int) / tau, 0.0), sg[sg.shape[0] - 1])
+    return f, max((sa - sb) / tau, 0.0), (va - vb) / tau, (aa - ab) / tau, ia, ib
+
+
+@njit(cache=True)
+def _sample_times(tk, tau, three):
+    """Instants where the smoothed profile is checked (sorted).
+
+    The breakpoints of the smoothed profile are the grid times and the same
+    shifted by tau; its jerk jumps there. Each piece between two breakpoints
+    is checked at its middle and, if ``three``, also just after its start and
+    just before its end (both one-sided limits of every jump).
+    """
+    n = tk.shape[0]
+    merged = np.empty(2 * n)
+    a = 0
+    b = 0
+    for k in range(2 * n):
+        if b >= n or (a < n and tk[a] <= tk[b] + tau):
+            merged[k] = tk[a]
+            a += 1
+        else:
+            merged[k] = tk[b] + tau
+            b += 1
+    per = 3 if three else 1
+    out = np.empty(per * (2 * n - 1))
+    for k in range(2 * n - 1):
+        lo = merged[k]
+        hi = merged[k + 1]
+        if three:
+            eps = 1e-9 * (hi - lo)
+            out[3 * k] = lo + eps
+            out[3 * k + 1] = 0.5 * (lo + hi)
+            out[3 * k + 2] = hi - eps
+        else:
+            out[k] = 0.5 * (lo + hi)
+    return out
+
+
+@njit(cache=True)
+def _exact_derivatives(kin, p0, ux, uy, branch, sg, qs, s, g, der_out, tmp):
+    """Path derivatives at s by IK (the grid's joints pick the representative)."""
+    f = min(max((s - sg[g]) / (sg[g + 1] - sg[g]), 0.0), 1.0)
+    ref0 = qs[g, 0] + f * (qs[g + 1, 0] - qs[g, 0])
+    ref1 = qs[g, 1] + f * (qs[g + 1, 1] - qs[g, 1])
+    ik_point(kin, p0[0] + s * ux, p0[1] + s * uy, branch, tmp)
+    q0 = tmp[0] + TWO_PI * round((ref0 - tmp[0]) / TWO_PI)
+    q1 = tmp[1] + TWO_PI * round((ref1 - tmp[1]) / TWO_PI)
+    path_derivatives(kin, q0, q1, ux, uy, der_out)
+    return q0, q1
+
+
+@njit(cache=True)
+def _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim, exact):
+    """Uniform time-stretch factor that brings the smoothed profile within every limit.
+
+    Stretching time by lambda divides velocities by lambda, accelerations by
+    lambda^2 and jerks by lambda^3, so the factor is the max over the checked
+    instants of (velocity ratio, sqrt(acceleration ratio), cbrt(jerk ratio)).
+    ``exact``: derivatives by IK at three instants per piece of the profile
+    (:func:`_sample_times`), else interpolated on the grid at one instant per piece.
+    """
+    m = w.shape[0]
+    times = _sample_times(tk, tau, exact)
+    dr = np.empty(N_DER)
+    tmp = np.empty(2)
+    ia = 0
+    ib = 0
+    g = 0
+    rv = 0.0
+    ra = 0.0
+    rj = 0.0
+    for k in range(times.shape[0]):
+        f, f1, f2, f3, ia, ib = _smoothed(times[k], tau, ia, ib, sg, x, w, tk, sk)
+        while g < m - 1 and f >= sg[g + 1]:
+            g += 1
+        if exact:
+            _exact_derivatives(kin, p0, ux, uy, branch, sg, qs, f, g, dr, tmp)
+        else:
+            r = min(max((f - sg[g]) / (sg[g + 1] - sg[g]), 0.0), 1.0)
+            for c in range(N_DER):
+                dr[c] = der[g, c] + r * (der[g + 1, c] - der[g, c])
+        rv = max(rv, f1 / lim.kv, abs(dr[4]) * f1 / lim.kw)
+        ra = max(ra, abs(f2) / lim.ka, abs(dr[4] * f2 + dr[5] * f1 * f1) / lim.kw_dot)
+        for a in range(2):
+            rv = max(rv, abs(dr[a]) * f1 / lim.vel[a])
+            ra = max(ra, abs(dr[a] * f2 + dr[2 + a] * f1 * f1) / lim.acc[a])
+            if lim.has_jerk:
+                rj = max(rj, abs(dr[a] * f3 + 3.0 * dr[2 + a] * f1 * f2
+                                 + dr[6 + a] * f1 * f1 * f1) / lim.jerk[a])
+    return max(rv, math.sqrt(ra), rj ** (1.0 / 3.0))
+
+
+@njit(cache=True)
+def _smoothing(kin, p0, ux, uy, branch, sg, qs, der, x, w, lim):
+    """(tau, lambda): the averaging width and time stretch of the fastest smoothed profile.
+
+    The duration lambda (T + tau) is minimised over tau on a log grid, refined by a
+    golden-section search on log tau; lambda is then measured with exact derivatives.
+    """
+    tk, sk = profile_knots(sg, x, w)
+    t1 = tk[tk.shape[0] - 1]
+    lo = math.log(lim.tau_min * t1)
+    hi = math.log(lim.tau_max * t1)
+    logs = np.empty(lim.n_tau)
+    costs = np.empty(lim.n_tau)
+    best = 0
+    for k in range(lim.n_tau):
+        logs[k] = lo + (hi - lo) * k / (lim.n_tau - 1)
+        tau = math.exp(logs[k])
+        costs[k] = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim,
+                             False) * (t1 + tau)
+        if costs[k] < costs[best]:
+            best = k
+    a = logs[max(best - 1, 0)]
+    b = logs[min(best + 1, lim.n_tau - 1)]
+    best_log = logs[best]
+    best_cost = costs[best]
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    for _ in range(lim.n_golden):
+        c = b - ratio * (b - a)
+        e = a + ratio * (b - a)
+        tc = math.exp(c)
+        te = math.exp(e)
+        fc = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tc, lim,
+                       False) * (t1 + tc)
+        fe = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, te, lim,
+                       False) * (t1 + te)
+        if fc < best_cost:
+            best_cost = fc
+            best_log = c
+        if fe < best_cost:
+            best_cost = fe
+            best_log = e
+        if fc < fe:
+            b = e
+        else:
+            a = c
+    tau = math.exp(best_log)
+    lam = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim, True)
+    return tau, lam * (1.0 + lim.margin)
+
+
+@njit(cache=True)
+def line_profile(kin, p0, p1, branch, q_start, q_end, lim):
+    """The executed straight move p0 -> p1 on ``branch``.
+
+    Returns ``(status, sg, qs, x, w, tau, lam, duration)``: the grid, its
+    joints, the acceleration-limited time-optimal profile ``x``/``w``
+    (:func:`topp_profile`), and, with jerk limits, the averaging width ``tau``
+    and the time stretch ``lam`` of the jerk-limited profile executed instead
+    (tau = 0, lam = 1 without jerk limits). duration = lam (T + tau), T the
+    duration of the acceleration-limited profile; inf if status != 0.
+    """
+    st, sg, qs, der = line_geometry(kin, p0, p1, branch, q_start, q_end, lim.grid)
+    x = np.zeros(lim.grid + 1)
+    w = np.zeros(lim.grid)
     if st != LINE_OK:
-        return st, np.inf
-    ok, x, w, duration = topp_profile(der, sg, vel, acc, kv, ka, kw, kw_dot)
+        return st, sg, qs, x, w, 0.0, 1.0, np.inf
+    ok, x, w, duration = topp_profile(der, sg, lim.vel, lim.acc, lim.kv, lim.ka, lim.kw,
+                                      lim.kw_dot)
     if not ok:
-        return LINE_SINGULAR, np.inf
-    return LINE_OK, duration
+        return LINE_SINGULAR, sg, qs, x, w, 0.0, 1.0, np.inf
+    if not lim.has_jerk:
+        return LINE_OK, sg, qs, x, w, 0.0, 1.0, duration
+    dx = p1[0] - p0[0]
+    dy = p1[1] - p0[1]
+    d = math.sqrt(dx * dx + dy * dy)
+    tau, lam = _smoothing(kin, p0, dx / d, dy / d, branch, sg, qs, der, x, w, lim)
+    return LINE_OK, sg, qs, x, w, tau, lam, lam * (duration + tau)
 
 
 @njit(cache=True)
-def line_tensor(points, q_both, kin, vel, acc, kv, ka, kw, kw_dot, m):
+def line_time(kin, p0, p1, branch, q_start, q_end, lim):
+    """``(status, duration)`` of the executed straight move p0 -> p1 on ``branch``."""
+    out = line_profile(kin, p0, p1, branch, q_start, q_end, lim)
+    return out[0], out[7]
+
+
+@njit(cache=True)
+def line_tensor(points, q_both, kin, lim):
     """Straight-line times for every pair and branch.
 
-    Returns ``(times (N, N, 2), status (N, N, 2))``: the time-optimal line from
+    Returns ``(times (N, N, 2), status (N, N, 2))``: the executed line from
     i to j with both ends on branch c (inf where infeasible, with the reason in
     ``status``). A branch that does not reach an endpoint has status 2.
     """
@@ -299,7 +567,7 @@ def line_tensor(points, q_both, kin, vel, acc, kv, ka, kw, kw_dot, m):
                     t = np.inf
                 else:
                     st, t = line_time(kin, points[i], points[j], c, q_both[i, c], q_both[j, c],
-                                      vel, acc, kv, ka, kw, kw_dot, m)
+                                      lim)
                 times[i, j, c] = t
                 times[j, i, c] = t
                 status[i, j, c] = st
@@ -308,12 +576,11 @@ def line_tensor(points, q_both, kin, vel, acc, kv, ka, kw, kw_dot, m):
 
 
 @njit(cache=True)
-def line_states(kin, p0, p1, branch, sg, qs, x, w, t):
-    """Joint positions, velocities and accelerations (each (T, 2)) at times t of a profile.
+def line_states(kin, p0, p1, branch, sg, qs, x, w, tau, lam, t):
+    """Joint positions, velocities, accelerations and jerks (each (T, 2)) at times t.
 
-    ``sg`` and ``qs`` are the grid and its joint positions (to pick the representative of each
-    IK solution), ``x``/``w`` the profile of :func:`topp_profile`; t is clamped
-    to [0, duration].
+    ``sg``, ``qs``, ``x``, ``w``, ``tau``, ``lam`` as returned by
+    :func:`line_profile`; t is clamped to [0, duration].
     """
     m = w.shape[0]
     dx = p1[0] - p0[0]
@@ -321,39 +588,33 @@ def line_states(kin, p0, p1, branch, sg, qs, x, w, t):
     d = math.sqrt(dx * dx + dy * dy)
     ux = dx / d
     uy = dy / d
-    starts = np.zeros(m + 1)
-    for i in range(m):
-        starts[i + 1] = starts[i] + 2.0 * (sg[i + 1] - sg[i]) / (math.sqrt(x[i])
-                                                                  + math.sqrt(x[i + 1]))
+    tk, sk = profile_knots(sg, x, w)
+    end = tk[m] + tau
     n_t = t.shape[0]
     q = np.empty((n_t, 2))
     qd = np.empty((n_t, 2))
     qdd = np.empty((n_t, 2))
-    der = np.empty(6)
+    qddd = np.empty((n_t, 2))
+    der = np.empty(N_DER)
     tmp = np.empty(2)
-    i = 0
+    ia = 0
+    ib = 0
+    g = 0
     for k in range(n_t):
-        tk = min(max(t[k], 0.0), starts[m])
-        # times are usually sorted: walk forward, else search
-        if tk < starts[i]:
-            i = 0
-        while i < m - 1 and tk >= starts[i + 1]:
-            i += 1
-        tau = tk - starts[i]
-        v0 = math.sqrt(x[i])
-        sdot = max(v0 + w[i] * tau, 0.0)
-        s = min(sg[i] + v0 * tau + 0.5 * w[i] * tau * tau, d)
-        # the grid's joints, interpolated, select the representative of the IK solution
-        f = min(max((s - sg[i]) / (sg[i + 1] - sg[i]), 0.0), 1.0)
-        ref0 = qs[i, 0] + f * (qs[i + 1, 0] - qs[i, 0])
-        ref1 = qs[i, 1] + f * (qs[i + 1, 1] - qs[i, 1])
-        ik_point(kin, p0[0] + s * ux, p0[1] + s * uy, branch, tmp)
-        q0 = tmp[0] + TWO_PI * round((ref0 - tmp[0]) / TWO_PI)
-        q1 = tmp[1] + TWO_PI * round((ref1 - tmp[1]) / TWO_PI)
+        tt = min(max(t[k] / lam, 0.0), end)
+        f, f1, f2, f3, ia, ib = _smoothed(tt, tau, ia, ib, sg, x, w, tk, sk)
+        f1 /= lam
+        f2 /= lam * lam
+        f3 /= lam * lam * lam
+        if f < sg[g]:
+            g = 0
+        while g < m - 1 and f >= sg[g + 1]:
+            g += 1
+        q0, q1 = _exact_derivatives(kin, p0, ux, uy, branch, sg, qs, f, g, der, tmp)
         q[k, 0] = q0
         q[k, 1] = q1
-        path_derivatives(kin, q0, q1, ux, uy, der)
         for a in range(2):
-            qd[k, a] = der[a] * sdot
-            qdd[k, a] = der[a] * w[i] + der[2 + a] * sdot * sdot
-    return q, qd, qdd
+            qd[k, a] = der[a] * f1
+            qdd[k, a] = der[a] * f2 + der[2 + a] * f1 * f1
+            qddd[k, a] = der[a] * f3 + 3.0 * der[2 + a] * f1 * f2 + der[6 + a] * f1 * f1 * f1
+    return q, qd, qdd, qddd

@@ -359,10 +359,34 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
     return TimingResult(matrix, model, configs, leg_check, q, phi, **extra)
 
 
+# Search settings of the jerk-limited line (see :class:`_line_kernels.LineLimits`):
+# averaging widths from 1e-3 to 2 x the acceleration-limited duration, 12 log-spaced
+# values refined by 10 golden-section steps; the stretch factor gets 1e-4 of slack.
+_TAU_RANGE = (1e-3, 2.0)
+_N_TAU, _N_GOLDEN = 12, 10
+_LINE_MARGIN = 1e-4
+
+
+def line_limits(arm: Arm, grid: int = 512) -> _lk.LineLimits:
+    """The kernel parameters of ``arm``'s straight-line moves on a path grid of ``grid`` intervals.
+
+    With joint jerk limits the line is driven jerk-limited (see
+    :func:`subtask_opt.arm.timing._line_kernels.line_profile`).
+    """
+    require_int("line_limits", "grid", grid, 16)
+    cl = arm.cartesian_limits
+    jl = arm.joint_limits
+    jerk = np.ones(2) if jl.jerk is None else np.array(jl.jerk, dtype=np.float64)
+    return _lk.LineLimits(np.array(jl.velocity, dtype=np.float64),
+                          np.array(jl.acceleration, dtype=np.float64), jerk,
+                          float(cl.kv), float(cl.ka), float(cl.kw), float(cl.kw_dot),
+                          jl.jerk is not None, int(grid), _N_TAU, _N_GOLDEN, _TAU_RANGE[0],
+                          _TAU_RANGE[1], _LINE_MARGIN)
+
+
 def _branch_tensors(points: np.ndarray, q_both: np.ndarray, arm: Arm, model: str,
                     line_fallback: str, line_grid: int) -> dict[str, np.ndarray]:
     """Times and move kinds between every pair of configurations (``joint``/``line``)."""
-    cl = arm.cartesian_limits
     jl = arm.joint_limits
     vel = np.array(jl.velocity)
     acc = np.array(jl.acceleration)
@@ -374,8 +398,7 @@ def _branch_tensors(points: np.ndarray, q_both: np.ndarray, arm: Arm, model: str
         out["branch_times"] = joint
         out["branch_moves"] = np.where(np.isfinite(joint), MOVE_JOINT, MOVE_NONE).astype(np.int8)
         return out
-    line, status = _lk.line_tensor(points, q_both, arm.kinematics, vel, acc, cl.kv, cl.ka,
-                                   cl.kw, cl.kw_dot, int(line_grid))
+    line, status = _lk.line_tensor(points, q_both, arm.kinematics, line_limits(arm, line_grid))
     n = len(points)
     line4 = np.full((n, 2, n, 2), np.inf)
     for c in range(2):

@@ -28,6 +28,9 @@ import numpy as np
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range, require_int
 from subtask_opt.planners.grid.world import GridWorld
 
+MAX_IMAGE_PIXELS = 4_000_000
+"""Images larger than this (2000 x 2000 pixels) are refused before decoding."""
+
 FREE = 0b00
 MIXED = 0b01
 APPROACHABLE = 0b10
@@ -109,8 +112,16 @@ def read_pixels(source: Any, threshold: float = 0.5) -> np.ndarray:
         path = Path(source)
         try:
             with Image.open(path) as img:
+                w, h = img.size
+                if w * h > MAX_IMAGE_PIXELS:
+                    raise InputDataError(
+                        f"image {str(path)!r} has {w}x{h} pixels; at most {MAX_IMAGE_PIXELS} "
+                        f"are read")
                 rgba = np.asarray(img.convert("RGBA"), dtype=float) / 255.0
-        except (OSError, UnidentifiedImageError, ValueError) as exc:
+        except (OSError, UnidentifiedImageError, ValueError, Image.DecompressionBombError) \
+                as exc:
+            if isinstance(exc, InputDataError):
+                raise
             raise InputDataError(f"cannot read image {str(path)!r}: {exc}") from None
         if rgba.size == 0:
             raise InputDataError(f"image {str(path)!r} is empty")

@@ -6,7 +6,14 @@ counts as obstacle) and split recursively: a node whose cells are all free is
 down to ``min_size`` cells (paper: the finest resolution, one cell). A grey
 node at ``min_size`` stays a grey leaf and is not routable.
 
-The planner (:func:`plan`) searches the graph of white leaves that share an
+The tree answers the AGV's collision question for a segment ahead
+(:meth:`Quadtree.segment_free`): descend from the root into the nodes whose
+closed square the segment meets; white nodes are cleared whole, a black leaf
+(or a grey leaf at ``min_size``) blocks. In open space this touches a handful
+of large leaves instead of every cell under the segment.
+
+The planner (:func:`plan`, registered as the AGV planner ``"quadtree"``)
+searches the graph of white leaves that share an
 edge (Dijkstra; a step goes leaf centre -> midpoint of the shared edge -> next
 centre, a polyline that stays inside the two leaves), then straightens the
 polyline by keeping the farthest waypoint in line of sight. Two leaves that
@@ -26,8 +33,10 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, require_int
-from subtask_opt.base.results import PlanResult, polyline_length
+from subtask_opt.base.geometry import polyline_length
+from subtask_opt.base.results import Outcome, PlanResult
 from subtask_opt.planners.agv import _kernels as K
+from subtask_opt.planners.base import check_seed, register
 from subtask_opt.planners.grid.world import GridWorld
 
 WHITE = 0
@@ -68,12 +77,29 @@ class Quadtree:
         leaf: bool array (n,), which nodes are leaves.
         label: int array ``[y, x]``: index into ``nodes`` of the leaf holding
             each grid cell.
+        children: int array (n, 4): indices of the four quarters of a split
+            node, -1 for a leaf or a quarter wholly outside the grid.
     """
 
     shape: tuple[int, int]
     nodes: np.ndarray
     leaf: np.ndarray
     label: np.ndarray
+    children: np.ndarray
+
+    def segment_free(self, a: Any, b: Any) -> bool:
+        """Whether the segment a-b (points (x, y), any reals) touches only
+        white leaves and stays off the grid's border line."""
+        h, w = self.shape
+        return bool(K.tree_segment_free(self.nodes, self.children, w, h, float(a[0]),
+                                        float(a[1]), float(b[0]), float(b[1])))
+
+    def leaf_at(self, xy: Any) -> int:
+        """Index of the leaf holding the cell nearest to point ``xy``."""
+        h, w = self.shape
+        x = min(max(int(round(float(xy[0]))), 0), w - 1)
+        y = min(max(int(round(float(xy[1]))), 0), h - 1)
+        return int(self.label[y, x])
 
     @property
     def leaves(self) -> np.ndarray:
@@ -104,10 +130,11 @@ def decompose(occupancy: np.ndarray, params: QuadtreeParams | None = None) -> Qu
     sat[1:, 1:] = padded.cumsum(0).cumsum(1)
     nodes: list[tuple[int, int, int, int, int]] = []
     leaf: list[bool] = []
+    parents: list[tuple[int, int]] = []
     label = np.full((h, w), -1, dtype=np.int64)
-    stack = [(0, 0, side, 0)]
+    stack = [(0, 0, side, 0, -1, 0)]
     while stack:
-        x0, y0, size, depth = stack.pop()
+        x0, y0, size, depth, parent, quarter = stack.pop()
         if x0 >= w or y0 >= h:
             continue  # wholly outside the grid: not part of the map
         n_blocked = sat[y0 + size, x0 + size] - sat[y0, x0 + size] - sat[y0 + size, x0] \
@@ -122,14 +149,18 @@ def decompose(occupancy: np.ndarray, params: QuadtreeParams | None = None) -> Qu
         idx = len(nodes)
         nodes.append((x0, y0, size, colour, depth))
         leaf.append(is_leaf)
+        parents.append((parent, quarter))
         if is_leaf:
             label[y0:y0 + size, x0:x0 + size] = idx
         else:
             half = size // 2
-            for dy in (half, 0):
-                for dx in (half, 0):
-                    stack.append((x0 + dx, y0 + dy, half, depth + 1))
-    return Quadtree((h, w), np.array(nodes, dtype=np.int64), np.array(leaf), label)
+            for q, (dy, dx) in enumerate(((half, half), (half, 0), (0, half), (0, 0))):
+                stack.append((x0 + dx, y0 + dy, half, depth + 1, idx, q))
+    children = np.full((len(nodes), 4), -1, dtype=np.int64)
+    for idx, (parent, quarter) in enumerate(parents):
+        if parent >= 0:
+            children[parent, quarter] = idx
+    return Quadtree((h, w), np.array(nodes, dtype=np.int64), np.array(leaf), label, children)
 
 
 def free_adjacency(tree: Quadtree) -> dict[int, dict[int, tuple[float, float]]]:
@@ -163,39 +194,48 @@ def _centre(node: np.ndarray) -> tuple[float, float]:
     return int(node[0]) + half, int(node[1]) + half
 
 
-def straighten(occupancy: np.ndarray, path: np.ndarray) -> np.ndarray:
+def straighten(tree: Quadtree, path: np.ndarray) -> np.ndarray:
     """Greedy line-of-sight shortcutting: from each kept point jump to the
-    farthest later point whose segment touches no blocked cell."""
+    farthest later point whose segment touches only white leaves."""
     path = np.asarray(path, dtype=float)
     if path.shape[0] <= 2:
         return path.copy()
-    occ = np.asarray(occupancy, dtype=bool)
     out = [path[0]]
     i = 0
     n = path.shape[0]
     while i < n - 1:
         j = n - 1
-        while j > i + 1 and not K.segment_free(occ, path[i, 0], path[i, 1],
-                                               path[j, 0], path[j, 1]):
+        while j > i + 1 and not tree.segment_free(path[i], path[j]):
             j -= 1
         out.append(path[j])
         i = j
     return np.array(out)
 
 
+@register("agv", "quadtree", description="shortest path over the free leaves of a quadtree "
+                                         "of the map, straightened by line of sight")
 def plan(world: GridWorld, start: Any, goal: Any, *, params: QuadtreeParams | None = None,
-         seed: int | None = None) -> PlanResult:
+         seed: int | None = None, stop: Any = None) -> PlanResult:
     """Plan over the white leaves of the quadtree of ``world``.
 
     ``seed`` is accepted for the common planner interface (the search is
-    deterministic). ``info`` holds ``nodes`` (white leaves, the graph size),
-    ``leaves`` (all leaves), ``leaf_path`` (leaves visited), ``raw_length``
-    (before straightening).
+    deterministic) and ``stop`` must be None (not iterative). ``info`` holds
+    ``nodes`` (white leaves, the graph size), ``leaves`` (all leaves),
+    ``leaf_path`` (leaves visited), ``raw_length`` (before straightening).
 
     Raises:
         UnreachableError: start or goal outside the grid or blocked.
+        ParameterError: bad ``params``, ``seed`` or a ``stop``.
     """
+    check_seed(seed)
+    if stop is not None:
+        raise ParameterError(f"the quadtree planner is not iterative: stop must be None, "
+                             f"got {stop!r}")
+    if not isinstance(world, GridWorld):
+        raise ParameterError(f"quadtree.plan needs a GridWorld, got {type(world).__name__}")
     params = QuadtreeParams() if params is None else params
+    if not isinstance(params, QuadtreeParams):
+        raise ParameterError(f"quadtree.plan params must be QuadtreeParams, got {params!r}")
     sx, sy = world.check_cell("start", start)
     gx, gy = world.check_cell("goal", goal)
     t0 = time.perf_counter()
@@ -227,7 +267,8 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: QuadtreeParams | No
     if dst not in dist:
         return PlanResult(np.zeros((0, 2)), False,
                           f"no path: goal {(gx, gy)} is not reachable from start {(sx, sy)}",
-                          "quadtree", time.perf_counter() - t0, info=info)
+                          "quadtree", time.perf_counter() - t0, info=info,
+                          outcome=Outcome.NO_PATH)
     chain = [dst]
     while chain[-1] != src:
         chain.append(prev[chain[-1]])
@@ -238,9 +279,10 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: QuadtreeParams | No
         pts.append(centres[b])
     pts.append((float(gx), float(gy)))
     raw = _dedupe(np.array(pts, dtype=float))
-    path = straighten(world.occupancy, raw) if params.straighten else raw
-    info.update(leaf_path=chain, raw_length=polyline_length(raw))
-    return PlanResult(path, True, "ok", "quadtree", time.perf_counter() - t0, info=info)
+    path = straighten(tree, raw) if params.straighten else raw
+    info.update(leaf_path=[int(c) for c in chain], raw_length=polyline_length(raw))
+    return PlanResult(path, True, "ok", "quadtree", time.perf_counter() - t0, info=info,
+                      outcome=Outcome.SUCCESS)
 
 
 def _dedupe(path: np.ndarray) -> np.ndarray:

@@ -1,47 +1,63 @@
-"""AGV among moving obstacles (seed 004): corner sub-goals, the t-second
-collision check, crossing rules and path recovery, as a fixed-step simulation.
+"""AGV among moving obstacles (seed 004) as a fixed-step simulation: corner
+sub-goals on the 2-bit local map, the quadtree check of the next leg, the
+t-second collision check, crossing rules, path recovery, and path following
+with corner check points against odometry drift.
 
 Geometry is in cells of the global map (x = column, y = row, a cell centre at
-integer coordinates); time in seconds. The AGV and the obstacles are discs
-moving at 1 cell/s by default, like the paper's 1 u/s.
+integer coordinates; one cell = one paper unit u = 10 x 10 pixels); time in
+seconds. The AGV and the obstacles are discs moving at 1 u/s by default, like
+the paper. The cell is ``cell_m`` metres (0.2 m by default), which maps the
+sonar's 0.2-2 m range to 1-10 cells.
 
-**Corner detection (rules 2-1 ... 2-7).** The OCR'd rules test whether an
-obstacle cell and its two opposite neighbours along one of four lines
-(vertical, horizontal, two diagonals) are all obstacle; if none of the four
-lines is, the cell is an *edge* (a convex corner). The AGV never drives to the
-corner cell itself: its *near points* are the free diagonal neighbours
-outside the corner whose two side cells are free too.
-
-**Navigation (rules 3-1 ... 3-4).** From the current point: if the goal is in
-line of sight go straight to it (3-1); otherwise give each visible near point
-the value ``distance + cost-to-go + turn_weight * |turn angle|`` and head for
-the best one (the paper's "nearest corner with the smallest angle"; the
-cost-to-go from the octile distance transform is what makes the choice
-complete - the bare greedy rule can cycle) and repeat from it (3-4). Only near
-points with a smaller cost-to-go than the current point count, so the route is
-finite. The list of chosen sub-goals is the AGV's *planned route*.
+**Route.** The AGV plans on its *routing map*: only ``00`` cells of the local
+map are routable (:mod:`.navigation`); a quadtree of that map answers every
+line-of-sight question and, when the AGV starts a new leg, checks the leg
+ahead against the AGV's current map (static obstacles it has learned) and
+reports seen obstacles standing in the leaves of that leg. Rules 1-5 (route
+sections), 2-1 ... 2-7 (corners, with the reading of the unreachable rules
+2-3 ... 2-6) and 3-1 ... 3-4 (navigation) are documented in
+:mod:`.navigation`.
 
 **t-second collision check (rule 3-3).** Every step, each obstacle within
-sensor range gets the velocity of its last two positions; the AGV's motion
+sonar range gets the velocity of its last two positions; the AGV's motion
 along its own path ahead at a candidate speed and the obstacles' straight
 extrapolations are stepped forward for ``horizon_s`` (the time factor); the
 candidate is safe when the predicted distance never falls below
 ``safety_distance`` (the distance factor). Candidates: keep cruising; brake to
-half speed; stop; speed up (the paper tries BRAKE first, then SPEED_UP).
+``v_brake``; stop; speed up (the paper tries BRAKE first, then SPEED_UP).
 
-**Crossing rules.** The first point where an obstacle's extrapolated ray meets
-the AGV's path decides who enters first: AGV first -> keep speed, or speed up
-to pass; obstacle first -> brake or wait (yield); both at once (arrival times
-within ``priority_margin_s``) -> a sidestep through a near point behind the
-obstacle's track ("the corner opposite the obstacle") at the obstacle's speed,
-then back onto the planned route. An obstacle that stands still in front of
-the waiting AGV for ``static_after_s`` (~10 s) becomes static: its cells enter
-the AGV's map, the AGV re-plans to the first point of its planned route past
-the obstacle (near points of the new map as sub-goals) and then follows the
-rest of that route (recovery). This stands for step 2 of the paper's recovery
-algorithm (compare the obstacle's time O(t) with the AGV's U(t)): while the
-obstacle moves the AGV keeps its route and lets the check make it yield; once
-the obstacle has stood still long enough, the near-point detour is taken.
+**Crossing rules (§4.1 (5-2), §4.2.2).** The first point where an obstacle's
+extrapolated ray meets the AGV's path decides who enters first:
+
+* AGV first (5-2-1): the AGV keeps its normal speed as long as the look-ahead
+  predicts no contact (separation >= ``collision_distance``), otherwise it
+  falls back to the collision check. With ``speed_up_to_pass`` it speeds up
+  to ``v_max`` to pass instead (an option; not the paper's rule).
+* Obstacle first (5-2-2): the t-second check decides (brake, stop, wait).
+* Both at once (arrival times within ``priority_margin_s``): a sidestep via a
+  point behind the obstacle's track ("the corner opposite the obstacle") at a
+  speed similar to the obstacle's, then back onto the route (recovery).
+
+An obstacle that stands still in front of the waiting AGV for
+``static_after_s`` (~10 s) becomes static: its cells enter the AGV's map, the
+quadtree is rebuilt, the AGV re-plans to the first point of its planned route
+past the obstacle and then follows the rest of it (recovery, step 2-2 of the
+paper's recovery algorithm). If the obstacle stands on the goal (or no detour
+exists) the AGV logs ``blocked`` and keeps waiting: the run ends in a timeout
+unless the obstacle leaves - the input is not to blame.
+
+**Path following (§3.3.2).** With ``drift`` on, the AGV's odometry is wrong:
+its true step is its commanded step turned by a heading error (a seeded
+per-run bias plus a random walk) and scaled by a seeded scale error, while it
+believes it moved as commanded. Every ``check_interval_s`` (with
+``check_points`` on) it looks for the nearest corner of the global map within
+sonar range and the camera's field of view, measures it and applies eq. (3):
+``TH = arctan(theta_x / f)`` (bearing of the corner from the image column
+``theta_x`` and the focal length ``f``) and ``X = L cos(TH) / tan(K)``
+(distance from the sensor height ``L`` and the depression angle ``K``), then
+resets its believed position to ``corner - X (cos, sin)(heading + TH)``. The
+believed heading is still off by the heading error, so a fix is not perfect;
+:attr:`AgvRun.drift_error` is ``|true - believed|`` at every step.
 """
 
 from __future__ import annotations
@@ -52,14 +68,40 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError, require_positive
-from subtask_opt.base.results import polyline_length
+from subtask_opt.base.errors import (
+    InputDataError,
+    NoPathError,
+    ParameterError,
+    UnreachableError,
+    require_non_negative,
+    require_positive,
+)
+from subtask_opt.base.geometry import polyline_length, simplify, wrap_angle
+from subtask_opt.base.results import Outcome, PlanResult
 from subtask_opt.planners.agv import _kernels as K
+from subtask_opt.planners.agv.navigation import (
+    Section,
+    build_tree,
+    landmarks,
+    navigate,
+    routing_map,
+    segment_route,
+    states_of_occupancy,
+)
+from subtask_opt.planners.agv.quadtree import Quadtree
+from subtask_opt.planners.base import check_seed, register
 from subtask_opt.planners.grid.world import GridWorld
 
-OUTCOMES = ("success", "collision", "timeout")
-EVENT_KINDS = ("subgoal", "crossing", "brake", "wait", "speed_up", "resume", "sidestep",
-               "static", "replan", "recovery", "blocked", "goal", "collision", "timeout")
+EVENT_KINDS = ("subgoal", "section", "crossing", "brake", "wait", "speed_up", "resume",
+               "sidestep", "static", "replan", "recovery", "blocked", "check_point", "goal",
+               "collision", "timeout", "no_path")
+
+MAX_STEPS = 2_000_000
+"""A run may take at most this many steps (``max_time_s / dt``)."""
+MAX_HORIZON_STEPS = 10_000
+"""The look-ahead may take at most this many steps (``horizon_s / dt``)."""
+MAX_RUN_BYTES = 1 << 30
+"""A run's recorded arrays may take at most this much memory (1 GiB)."""
 
 
 # -- parameters and inputs ---------------------------------------------------------------
@@ -69,14 +111,17 @@ class AgvParams:
 
     Attributes:
         dt: simulation time step.
-        v_nominal: cruising speed (paper: 1 cell/s).
-        v_max: speed when speeding up to pass.
+        v_nominal: cruising speed (paper: 1 u/s, one cell per second).
+        v_max: speed when speeding up to pass (only with ``speed_up_to_pass``
+            or when no slower choice is safe).
         v_brake: speed when braking to yield.
         a_max: acceleration limit (speed changes by at most ``a_max * dt`` a step).
         horizon_s: time factor of the t-second check (how far ahead it looks).
         safety_distance: distance factor: a prediction closer than this is a conflict.
         collision_distance: centres closer than this collide (sum of body radii).
-        sensor_range: obstacles farther than this are not seen (sonar range).
+        cell_m: side of a cell in metres (maps the sonar range to cells).
+        sonar_min_m, sonar_max_m: sonar range (paper: 0.2 m - 2 m); obstacles
+            and check points are seen only in it.
         static_after_s: an obstacle standing in front this long becomes static.
         static_radius: cells whose centre lies within this of a static obstacle
             are blocked in the AGV's map.
@@ -88,6 +133,18 @@ class AgvParams:
         collision_check: the t-second check (off: the AGV never brakes).
         crossing_rules: priority rules and sidesteps (off: brake first, as in the
             paper's bare algorithm).
+        speed_up_to_pass: when the AGV enters a crossing first, speed up to
+            ``v_max`` instead of keeping the normal speed (rule 5-2-1).
+        drift: odometry drift (off in the paper's experiments).
+        drift_heading_sd_deg: standard deviation of the per-run heading bias.
+        drift_walk_deg: heading random walk, degrees per sqrt(second).
+        drift_scale_sd: standard deviation of the per-run odometry scale error.
+        check_points: correct the position at corners (§3.3.2) when drifting.
+        check_interval_s: time between two check-point looks.
+        camera_f_px: focal length ``f`` of eq. (3), pixels.
+        camera_height: sensor height ``L`` of eq. (3), cells.
+        camera_fov_deg: horizontal field of view; corners outside are not seen.
+        open_leaf: quadtree leaves of at least this side are open road (rules 3-4).
     """
 
     dt: float = 0.25
@@ -98,7 +155,9 @@ class AgvParams:
     horizon_s: float = 4.0
     safety_distance: float = 1.5
     collision_distance: float = 0.8
-    sensor_range: float = 10.0
+    cell_m: float = 0.2
+    sonar_min_m: float = 0.2
+    sonar_max_m: float = 2.0
     static_after_s: float = 10.0
     static_radius: float = 1.5
     priority_margin_s: float = 1.0
@@ -107,6 +166,17 @@ class AgvParams:
     max_time_s: float = 300.0
     collision_check: bool = True
     crossing_rules: bool = True
+    speed_up_to_pass: bool = False
+    drift: bool = False
+    drift_heading_sd_deg: float = 2.0
+    drift_walk_deg: float = 0.3
+    drift_scale_sd: float = 0.03
+    check_points: bool = True
+    check_interval_s: float = 2.0
+    camera_f_px: float = 500.0
+    camera_height: float = 1.0
+    camera_fov_deg: float = 120.0
+    open_leaf: int = 4
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -114,11 +184,13 @@ class AgvParams:
             if f.type in ("bool", bool):
                 if not isinstance(value, bool):
                     raise ParameterError(f"AgvParams.{f.name} must be a bool, got {value!r}")
-            elif f.name == "turn_weight":
-                if isinstance(value, bool) or not isinstance(value, (int, float)) \
-                        or not math.isfinite(value) or value < 0:
+            elif f.name in ("turn_weight", "drift_heading_sd_deg", "drift_walk_deg",
+                            "drift_scale_sd"):
+                require_non_negative("AgvParams", f.name, value)
+            elif f.name == "open_leaf":
+                if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 2**20:
                     raise ParameterError(
-                        f"AgvParams.turn_weight must be a finite number >= 0, got {value!r}")
+                        f"AgvParams.open_leaf must be an integer in [1, 1048576], got {value!r}")
             else:
                 require_positive("AgvParams", f.name, value)
         if not self.v_brake < self.v_nominal <= self.v_max:
@@ -129,22 +201,63 @@ class AgvParams:
             raise ParameterError(
                 f"AgvParams.safety_distance must be >= collision_distance "
                 f"({self.collision_distance!r}), got {self.safety_distance!r}")
+        if self.sonar_min_m >= self.sonar_max_m:
+            raise ParameterError(
+                f"AgvParams.sonar_min_m must be < sonar_max_m ({self.sonar_max_m!r}), "
+                f"got {self.sonar_min_m!r}")
+        if self.camera_fov_deg >= 180:
+            raise ParameterError(
+                f"AgvParams.camera_fov_deg must be in (0, 180), got {self.camera_fov_deg!r}")
         if self.horizon_s < self.dt or self.max_time_s < self.dt:
             raise ParameterError(
                 f"AgvParams.horizon_s and max_time_s must be >= dt ({self.dt!r}), got "
                 f"{self.horizon_s!r} and {self.max_time_s!r}")
+        steps = self.horizon_s / self.dt
+        if steps > MAX_HORIZON_STEPS:
+            raise ParameterError(
+                f"AgvParams.horizon_s / dt = {steps:.3g} look-ahead steps; at most "
+                f"{MAX_HORIZON_STEPS} are allowed (raise dt or lower horizon_s)")
+        steps = self.max_time_s / self.dt
+        if steps > MAX_STEPS:
+            raise ParameterError(
+                f"AgvParams.max_time_s / dt = {steps:.3g} steps; at most {MAX_STEPS} are "
+                f"allowed (raise dt or lower max_time_s)")
+
+    @property
+    def sonar_range(self) -> tuple[float, float]:
+        """The sonar range in cells (near, far)."""
+        return self.sonar_min_m / self.cell_m, self.sonar_max_m / self.cell_m
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> AgvParams:
+    def from_dict(cls, data: Any) -> AgvParams:
         """Build from a mapping; unknown keys are an error naming them."""
         if not isinstance(data, dict):
-            raise InputDataError(f"AGV params must be a mapping, got {data!r}")
+            raise InputDataError(f"AGV params must be a mapping, got {data!r:.80}")
         names = {f.name for f in fields(cls)}
-        unknown = sorted(set(data) - names)
+        unknown = sorted(str(k) for k in set(data) - names)
         if unknown:
             raise ParameterError(
                 f"unknown AgvParams field(s) {unknown}; allowed: {sorted(names)}")
         return cls(**data)
+
+
+def run_size(params: AgvParams, n_obstacles: int) -> tuple[int, int]:
+    """(steps, bytes) a run of these params with ``n_obstacles`` will record
+    (its obstacle-free twin and the final copies included)."""
+    steps = int(math.ceil(params.max_time_s / params.dt)) + 1
+    per_step = 2 * (8 + 8 + 16 + 16 + 8) + 2 * 16 * n_obstacles
+    return steps, steps * per_step
+
+
+def check_run_size(params: AgvParams, n_obstacles: int) -> None:
+    """Raise :class:`ParameterError` before a run would allocate over
+    :data:`MAX_RUN_BYTES`."""
+    steps, size = run_size(params, n_obstacles)
+    if size > MAX_RUN_BYTES:
+        raise ParameterError(
+            f"a run of {steps} steps (max_time_s {params.max_time_s:g} / dt {params.dt:g}) "
+            f"with {n_obstacles} obstacle(s) would record about {size / 2**30:.2f} GiB; "
+            f"the limit is {MAX_RUN_BYTES / 2**30:.0f} GiB")
 
 
 @dataclass(frozen=True)
@@ -152,13 +265,14 @@ class MovingObstacle:
     """An obstacle that follows its own polyline and then stays at its end.
 
     Attributes:
-        path: (k, 2) waypoints in cells, k >= 1.
-        speed: cells per second (paper: 1, like the AGV).
+        path: (k, 2) waypoints in cells, k >= 1 (any array-like; stored as a
+            read-only float array).
+        speed: cells per second (paper: 1 u/s, like the AGV).
         start_time: it waits at ``path[0]`` until this time.
         name: a label for plots and events.
     """
 
-    path: np.ndarray
+    path: Any
     speed: float = 1.0
     start_time: float = 0.0
     name: str = ""
@@ -166,21 +280,20 @@ class MovingObstacle:
     def __post_init__(self) -> None:
         try:
             path = np.array(self.path, dtype=float).reshape(-1, 2)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise InputDataError(
-                f"MovingObstacle.path must be a list of (x, y) points, got {self.path!r}") \
+                f"MovingObstacle.path must be a list of (x, y) points, got {self.path!r:.80}") \
                 from None
         if path.shape[0] < 1 or not np.all(np.isfinite(path)):
             raise InputDataError(
-                f"MovingObstacle.path must hold >= 1 finite (x, y) points, got {self.path!r}")
+                f"MovingObstacle.path must hold >= 1 finite (x, y) points, "
+                f"got {self.path!r:.80}")
         path.setflags(write=False)
         object.__setattr__(self, "path", path)
         require_positive("MovingObstacle", "speed", self.speed)
-        if isinstance(self.start_time, bool) or not isinstance(self.start_time, (int, float)) \
-                or not math.isfinite(self.start_time) or self.start_time < 0:
-            raise ParameterError(
-                f"MovingObstacle.start_time must be a finite number >= 0, "
-                f"got {self.start_time!r}")
+        require_non_negative("MovingObstacle", "start_time", self.start_time)
+        if not isinstance(self.name, str):
+            raise InputDataError(f"MovingObstacle.name must be a string, got {self.name!r:.80}")
 
     def positions(self, times: np.ndarray) -> np.ndarray:
         """Positions (len(times), 2) at the given times."""
@@ -195,7 +308,13 @@ class MovingObstacle:
 
 @dataclass(frozen=True)
 class AgvScenario:
-    """A static map, the AGV's start and goal, and the moving obstacles."""
+    """A static map, the AGV's start and goal, and the moving obstacles.
+
+    Attributes:
+        states: the 2-bit local map (uint8 ``[y, x]``, values 0-3; see
+            :mod:`.certainty_grid`); default: from the world's occupancy
+            (no mixed cells). Start and goal must be ``00`` cells.
+    """
 
     name: str
     world: GridWorld
@@ -204,17 +323,40 @@ class AgvScenario:
     obstacles: tuple[MovingObstacle, ...] = ()
     params: AgvParams = field(default_factory=AgvParams)
     description: str = ""
+    states: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.world, GridWorld):
-            raise InputDataError(f"AgvScenario.world must be a GridWorld, got {self.world!r}")
+            raise InputDataError(f"AgvScenario.world must be a GridWorld, got {self.world!r:.80}")
+        if self.states is None:
+            states = states_of_occupancy(self.world.occupancy)
+        else:
+            states = np.asarray(self.states)
+            if states.shape != self.world.occupancy.shape or not np.issubdtype(
+                    states.dtype, np.integer) or states.min() < 0 or states.max() > 3:
+                raise InputDataError(
+                    f"AgvScenario.states must be integers 0-3 of shape "
+                    f"{self.world.occupancy.shape}, got {states.dtype} {states.shape}")
+            states = states.astype(np.uint8)
+            if np.any((states >= 2) != self.world.occupancy):
+                raise InputDataError("AgvScenario.states disagree with the world: states "
+                                     "10/11 must be exactly its blocked cells")
+        states.setflags(write=False)
+        object.__setattr__(self, "states", states)
         object.__setattr__(self, "start", self.world.check_cell("start", self.start))
         object.__setattr__(self, "goal", self.world.check_cell("goal", self.goal))
+        route_map = routing_map(states)
+        for label in ("start", "goal"):
+            x, y = getattr(self, label)
+            if route_map[y, x]:
+                raise UnreachableError(
+                    f"{label} ({x}, {y}) is on a mixed (01) cell of the local map; only 00 "
+                    f"cells are routable")
         obstacles = tuple(self.obstacles)
         for i, ob in enumerate(obstacles):
             if not isinstance(ob, MovingObstacle):
                 raise InputDataError(f"AgvScenario.obstacles[{i}] must be a MovingObstacle, "
-                                     f"got {ob!r}")
+                                     f"got {ob!r:.80}")
             p = ob.path
             if np.any(p < -0.5) or np.any(p[:, 0] > self.world.width - 0.5) \
                     or np.any(p[:, 1] > self.world.height - 0.5):
@@ -223,7 +365,14 @@ class AgvScenario:
                     f"{self.world.width}x{self.world.height} map")
         object.__setattr__(self, "obstacles", obstacles)
         if not isinstance(self.params, AgvParams):
-            raise ParameterError(f"AgvScenario.params must be AgvParams, got {self.params!r}")
+            raise ParameterError(f"AgvScenario.params must be AgvParams, got {self.params!r:.80}")
+        check_run_size(self.params, len(obstacles))
+
+    @property
+    def routing_map(self) -> np.ndarray:
+        """Bool ``[y, x]``: cells the AGV may not route through (not ``00``)."""
+        assert self.states is not None
+        return routing_map(self.states)
 
     def with_params(self, **changes: Any) -> AgvScenario:
         """A copy with some :class:`AgvParams` fields changed."""
@@ -248,36 +397,43 @@ class AgvRun:
 
     Attributes:
         scenario: name of the scenario.
-        outcome: ``"success"``, ``"collision"`` or ``"timeout"``.
+        outcome: :class:`Outcome` ``success``, ``collision``, ``timeout`` or
+            ``no_path`` (the goal cannot be reached on the static map).
         time_s: time at which the run ended.
-        free_time_s: time of the same run without moving obstacles.
+        free_time_s: time of the same run without moving obstacles and drift.
         min_separation: smallest AGV-obstacle centre distance seen (inf if none).
-        times: (T,) sample times; ``trajectory`` (T, 2) AGV positions;
-            ``speeds`` (T,); ``obstacle_positions`` (m, T, 2).
+        times: (T,) sample times; ``trajectory`` (T, 2) true AGV positions;
+            ``believed`` (T, 2) where the AGV thought it was; ``speeds`` (T,);
+            ``obstacle_positions`` (m, T, 2).
         events: what happened, in time order.
         planned_route: (k, 2) the route planned before the start.
+        sections: the planned route's sections (rules 3-5).
         static_cells: bool ``[y, x]``: cells added to the AGV's map by obstacles
             that became static.
+        seed: the drift seed (None: drift off or unseeded).
     """
 
     scenario: str
-    outcome: str
+    outcome: Outcome
     time_s: float
     free_time_s: float
     min_separation: float
     times: np.ndarray
     trajectory: np.ndarray
+    believed: np.ndarray
     speeds: np.ndarray
     obstacle_positions: np.ndarray
     events: tuple[Event, ...]
     planned_route: np.ndarray
+    sections: tuple[Section, ...]
     static_cells: np.ndarray
     world: GridWorld
     params: AgvParams
+    seed: int | None = None
 
     @property
     def success(self) -> bool:
-        return self.outcome == "success"
+        return self.outcome == Outcome.SUCCESS
 
     @property
     def delay_s(self) -> float:
@@ -288,6 +444,22 @@ class AgvRun:
     def path_length(self) -> float:
         return polyline_length(self.trajectory)
 
+    @property
+    def drift_error(self) -> np.ndarray:
+        """(T,) distance between the true and the believed position."""
+        d = self.trajectory - self.believed
+        return np.hypot(d[:, 0], d[:, 1])
+
+    @property
+    def mean_drift_error(self) -> float:
+        e = self.drift_error
+        return float(e.mean()) if len(e) else 0.0
+
+    @property
+    def max_drift_error(self) -> float:
+        e = self.drift_error
+        return float(e.max()) if len(e) else 0.0
+
     def kinds(self) -> list[str]:
         """Event kinds in time order."""
         return [e.kind for e in self.events]
@@ -297,22 +469,43 @@ class AgvRun:
         return next((e for e in self.events if e.kind == kind), None)
 
     def to_dict(self, *, trajectory: bool = True) -> dict[str, Any]:
+        """JSON-safe record (inf/nan as None)."""
         out: dict[str, Any] = {
-            "scenario": self.scenario, "outcome": self.outcome, "success": self.success,
+            "scenario": self.scenario, "outcome": self.outcome.value, "success": self.success,
             "time_s": self.time_s, "free_time_s": self.free_time_s,
             "delay_s": self.delay_s if self.success else None,
             "min_separation": self.min_separation if math.isfinite(self.min_separation)
             else None,
             "path_length": self.path_length,
+            "mean_drift_error": self.mean_drift_error,
+            "max_drift_error": self.max_drift_error,
+            "seed": self.seed,
             "events": [e.to_dict() for e in self.events],
             "planned_route": self.planned_route.tolist(),
+            "sections": [{"start": list(s.start), "end": list(s.end), "road": s.road,
+                          "leaves": list(s.leaves), "leg": s.leg} for s in self.sections],
             "params": asdict(self.params),
         }
         if trajectory:
             out["times"] = self.times.tolist()
             out["trajectory"] = self.trajectory.tolist()
+            out["believed"] = self.believed.tolist()
             out["obstacle_positions"] = self.obstacle_positions.tolist()
         return out
+
+    def to_plan_result(self, runtime_s: float = 0.0) -> PlanResult:
+        """The run as the planner protocol's :class:`PlanResult`: the driven
+        path (simplified), the outcome, and a JSON-safe summary in ``info``."""
+        info = self.to_dict(trajectory=False)
+        for key in ("scenario", "outcome", "success"):
+            info.pop(key)
+        message = "ok" if self.success else next(
+            (f"{e.kind}: {e.detail}" if e.detail else e.kind for e in reversed(self.events)
+             if e.kind in ("collision", "timeout", "no_path")), self.outcome.value)
+        path = (np.zeros((0, 2)) if self.outcome == Outcome.NO_PATH
+                else simplify(self.trajectory, 0.05))
+        return PlanResult(path, self.success, message, "agv", runtime_s, info=info,
+                          outcome=self.outcome)
 
     def summary(self) -> str:
         counts: dict[str, int] = {}
@@ -322,119 +515,18 @@ class AgvRun:
         delay = f"delay {self.delay_s:.2f} s, " if self.success else ""
         sep = (f"min separation {self.min_separation:.2f}"
                if math.isfinite(self.min_separation) else "no obstacle")
-        return (f"{self.scenario}: {self.outcome} at t = {self.time_s:.2f} s "
+        drift = (f", drift error mean {self.mean_drift_error:.2f} / max "
+                 f"{self.max_drift_error:.2f} cells" if self.params.drift else "")
+        return (f"{self.scenario}: {self.outcome.value} at t = {self.time_s:.2f} s "
                 f"(obstacle-free {self.free_time_s:.2f} s), {delay}{sep}, "
-                f"path {self.path_length:.2f} cells; events: {ev}")
+                f"path {self.path_length:.2f} cells{drift}; events: {ev}")
 
 
-# -- corners and navigation ---------------------------------------------------------------
-def detect_corners(occupancy: np.ndarray) -> np.ndarray:
-    """Obstacle cells that are edges by rules 2-2 ... 2-6 (bool ``[y, x]``).
-
-    A blocked cell is *not* an edge when, along one of the four lines through
-    it, both opposite neighbours are blocked too; the map border counts as
-    free so that obstacles touching it keep their corners.
-    """
-    occ = np.asarray(occupancy, dtype=bool)
-    p = np.pad(occ, 1, constant_values=False)
-    h, w = occ.shape
-
-    def nb(dy: int, dx: int) -> np.ndarray:
-        return p[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
-
-    inline = ((nb(-1, 0) & nb(1, 0)) | (nb(0, -1) & nb(0, 1))
-              | (nb(-1, -1) & nb(1, 1)) | (nb(-1, 1) & nb(1, -1)))
-    return occ & ~inline
-
-
-def near_points(occupancy: np.ndarray, corners: np.ndarray | None = None) -> np.ndarray:
-    """Sub-goal points (k, 2) as cell centres (x, y): the free diagonal
-    neighbours of edge cells whose two side cells are free."""
-    occ = np.asarray(occupancy, dtype=bool)
-    corners = detect_corners(occ) if corners is None else corners
-    h, w = occ.shape
-    free = np.pad(~occ, 1, constant_values=False)
-    found = np.zeros((h, w), dtype=bool)
-    cy, cx = np.nonzero(corners)
-    for dy in (-1, 1):
-        for dx in (-1, 1):
-            ok = free[1 + cy + dy, 1 + cx + dx] & free[1 + cy + dy, 1 + cx] \
-                & free[1 + cy, 1 + cx + dx]
-            found[cy[ok] + dy, cx[ok] + dx] = True
-    ys, xs = np.nonzero(found)
-    return np.column_stack([xs, ys]).astype(float)
-
-
-def line_of_sight(occupancy: np.ndarray, a: Any, b: Any) -> bool:
-    """Whether the segment a-b touches no blocked cell (closed cells)."""
-    return bool(K.segment_free(np.asarray(occupancy, dtype=bool), float(a[0]), float(a[1]),
-                               float(b[0]), float(b[1])))
-
-
-def navigate(occupancy: np.ndarray, start: Any, target: Any, *,
-             turn_weight: float = 1.0, points: np.ndarray | None = None) -> np.ndarray:
-    """Sub-goals (k, 2) from ``start`` to ``target`` by rules 3-1 ... 3-4.
-
-    ``start`` may be any point of a free cell; ``target`` is a free cell
-    centre. The last row is ``target``. ``points`` overrides the near points.
-
-    Raises:
-        NoPathError: the target cannot be reached on this map.
-    """
-    from subtask_opt.planners.grid.distance_transform import distance_field, path_from_field
-
-    occ = np.asarray(occupancy, dtype=bool)
-    world = GridWorld(occ)
-    pos = np.array(start, dtype=float)
-    tgt = np.array(target, dtype=float)
-    tcell = (int(round(tgt[0])), int(round(tgt[1])))
-    cost = distance_field(world, tcell, "octile")
-    pts = near_points(occ) if points is None else np.asarray(points, dtype=float)
-    pcost = cost[pts[:, 1].astype(int), pts[:, 0].astype(int)] if len(pts) else np.zeros(0)
-    heading = tgt - pos
-    out: list[np.ndarray] = []
-    for _ in range(len(pts) + occ.size + 2):
-        if K.segment_free(occ, pos[0], pos[1], tgt[0], tgt[1]):  # rule 3-1
-            out.append(tgt)
-            return np.array(out)
-        cell = (int(round(pos[0])), int(round(pos[1])))
-        here = cost[cell[1], cell[0]]
-        if not math.isfinite(here):
-            raise NoPathError(f"no route from ({pos[0]:.2f}, {pos[1]:.2f}) to target {tcell}")
-        best, best_val = None, math.inf
-        for i in np.flatnonzero(pcost < here - 1e-9):
-            c = pts[i]
-            if not K.segment_free(occ, pos[0], pos[1], c[0], c[1]):
-                continue
-            d = c - pos
-            dist = math.hypot(d[0], d[1])
-            val = dist + pcost[i] + turn_weight * _angle(heading, d)
-            if val < best_val:
-                best, best_val = c, val
-        if best is None:
-            # no visible near point leads closer: follow the distance transform
-            cells = path_from_field(world, cost, cell).astype(float)
-            best = cells[1] if len(cells) > 1 else cells[0]
-            for c in cells[:0:-1]:
-                if K.segment_free(occ, pos[0], pos[1], c[0], c[1]):
-                    best = c
-                    break
-        heading = best - pos
-        out.append(best.copy())
-        pos = best.copy()
-    raise NoPathError(f"navigation to {tcell} did not converge")  # pragma: no cover
-
-
-def _angle(u: np.ndarray, v: np.ndarray) -> float:
-    nu, nv = math.hypot(u[0], u[1]), math.hypot(v[0], v[1])
-    if nu == 0 or nv == 0:
-        return 0.0
-    return math.acos(max(-1.0, min(1.0, float(u @ v) / (nu * nv))))
-
-
-def plan_route(world: GridWorld, start: Any, goal: Any, params: AgvParams | None = None
-               ) -> np.ndarray:
-    """The planned route (k, 2), start first, of an AGV on a static map.
+def plan_route(world: GridWorld, start: Any, goal: Any, params: AgvParams | None = None,
+               *, states: np.ndarray | None = None) -> np.ndarray:
+    """The planned route (k, 2), start first, of an AGV on a static map
+    (routing only through ``00`` cells of ``states``, default: the world's
+    occupancy).
 
     Raises:
         UnreachableError: start or goal outside the map or blocked.
@@ -443,8 +535,25 @@ def plan_route(world: GridWorld, start: Any, goal: Any, params: AgvParams | None
     params = AgvParams() if params is None else params
     s = world.check_cell("start", start)
     g = world.check_cell("goal", goal)
-    subgoals = navigate(world.occupancy, s, g, turn_weight=params.turn_weight)
+    occ = routing_map(states_of_occupancy(world.occupancy) if states is None else states)
+    tree = build_tree(occ)
+    subgoals = navigate(tree, occ, s, g, turn_weight=params.turn_weight)
     return np.vstack([np.array(s, dtype=float), subgoals])
+
+
+def line_of_sight(occupancy: np.ndarray, a: Any, b: Any) -> bool:
+    """Whether the segment a-b touches no blocked cell (closed squares).
+
+    Between cell centres this is the grid family's exact kernel; any other
+    end points go through a quadtree of ``occupancy`` (the same rule).
+    """
+    occ = np.asarray(occupancy, dtype=bool)
+    pa, pb = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if np.all(pa == np.round(pa)) and np.all(pb == np.round(pb)):
+        from subtask_opt.planners.grid._kernels import segment_hits
+
+        return segment_hits(occ, int(pa[0]), int(pa[1]), int(pb[0]), int(pb[1]), True) == 0
+    return build_tree(occ).segment_free(pa, pb)
 
 
 def _cumlen(pts: np.ndarray) -> np.ndarray:
@@ -458,23 +567,38 @@ def _cumlen(pts: np.ndarray) -> np.ndarray:
 class _Agv:
     """Mutable state of one run (private: :func:`simulate` is the API)."""
 
-    def __init__(self, scenario: AgvScenario, route: np.ndarray) -> None:
+    def __init__(self, scenario: AgvScenario, route: np.ndarray, seed: int | None) -> None:
         self.sc = scenario
-        self.p = scenario.params
-        self.occ = np.array(scenario.world.occupancy, dtype=bool)
+        self.p = p = scenario.params
+        self.occ = scenario.routing_map.copy()
+        self.tree: Quadtree = build_tree(self.occ)
+        self.global_occ = np.asarray(scenario.world.occupancy, dtype=bool)
         self.static_cells = np.zeros_like(self.occ)
-        self.pos = route[0].copy()
+        self.pos = route[0].copy()          # where the AGV believes it is
+        self.true = route[0].copy()         # where it is
+        self.heading = math.atan2(*(route[-1] - route[0])[::-1]) if len(route) > 1 else 0.0
         self.v = 0.0
         self.wps: list[np.ndarray] = [r.copy() for r in route[1:]]
         self.tags: list[str] = ["subgoal"] * (len(self.wps) - 1) + ["goal"]
         self.events: list[Event] = []
         self.mode = "cruise"
         self.waiting = False
-        self.seen: set[int] = set()
+        self.priority: dict[int, str] = {}
         self.sidestepped: set[int] = set()
         self.static: set[int] = set()
+        self.blocked_logged: set[int] = set()
         self.stand_time = np.zeros(len(scenario.obstacles))
         self.conflict = -1
+        self.leg_checked = False
+        # odometry drift
+        self.rng = np.random.default_rng(seed) if p.drift else None
+        self.bias = self.scale = self.walk = 0.0
+        if self.rng is not None:
+            self.bias = math.radians(float(self.rng.normal(0.0, p.drift_heading_sd_deg)))
+            self.scale = float(self.rng.normal(0.0, p.drift_scale_sd))
+        self.marks = landmarks(self.global_occ) if p.drift and p.check_points else np.zeros((0, 2))
+        self.vis_tree = build_tree(self.global_occ) if len(self.marks) else None
+        self.next_check = p.check_interval_s
 
     def log(self, t: float, kind: str, detail: str = "") -> None:
         self.events.append(Event(float(t), kind, detail))
@@ -483,15 +607,37 @@ class _Agv:
         pts = np.vstack([self.pos[None, :]] + [w[None, :] for w in self.wps])
         return pts, _cumlen(pts)
 
-    def predict(self, pts, cum, v_target, obs, vel) -> tuple[float, int]:
+    def predict(self, pts: np.ndarray, cum: np.ndarray, v_target: float, obs: np.ndarray,
+                vel: np.ndarray) -> tuple[float, int]:
         p = self.p
-        steps = int(round(p.horizon_s / p.dt))
-        sep, j, _ = K.predict_min_separation(pts, cum, self.v, v_target, p.a_max, p.dt,
-                                             steps, obs, vel)
-        return sep, j
+        motion = K.Motion(float(self.v), float(v_target), float(p.a_max), float(p.dt),
+                          int(round(p.horizon_s / p.dt)))
+        sep, j, _ = K.predict_min_separation(pts, cum, motion, obs, vel)
+        return float(sep), int(j)
+
+    # the quadtree check of the leg ahead ---------------------------------------------------
+    def check_leg(self, t: float, obs: np.ndarray, ids: np.ndarray) -> None:
+        """When a leg starts: is it still free in the AGV's map, and which seen
+        obstacles stand in the leaves of its sections."""
+        if not self.wps:
+            return
+        nxt = self.wps[0]
+        if not self.tree.segment_free(self.pos, nxt):
+            self.log(t, "section", f"leg to ({nxt[0]:.0f}, {nxt[1]:.0f}) is blocked in the "
+                                   f"map: re-plan")
+            self.replan(t, nxt)
+            return
+        secs = segment_route(np.array([self.pos, nxt]), self.tree, open_leaf=self.p.open_leaf)
+        leaves = {lf for s in secs for lf in s.leaves}
+        inside = [int(j) for j, o in zip(ids, obs, strict=True)
+                  if self.tree.leaf_at(o) in leaves]
+        if inside:
+            self.log(t, "section", f"obstacle(s) {inside} in the next section(s) "
+                                   f"({len(secs)} section(s), {len(leaves)} leaves)")
 
     # crossing priority -------------------------------------------------------------------
-    def classify(self, pts, cum, o, v) -> tuple[str, np.ndarray | None, float]:
+    def classify(self, pts: np.ndarray, cum: np.ndarray, o: np.ndarray, v: np.ndarray
+                 ) -> tuple[str, np.ndarray | None, float]:
         """(kind, crossing point, its arc length on the path ahead)."""
         speed = math.hypot(v[0], v[1])
         if speed < 1e-9:
@@ -517,7 +663,8 @@ class _Agv:
                 return kind, a + sig * d, arc
         return "head_on", None, math.nan
 
-    def sidestep(self, t, pts, cum, x_pt, arc, vel, j) -> bool:
+    def sidestep(self, t: float, pts: np.ndarray, cum: np.ndarray, x_pt: np.ndarray,
+                 arc: float, vel: np.ndarray, j: int) -> bool:
         """Pass behind obstacle ``j``: via a point on its track behind the
         crossing, then back onto the path ahead (recovery)."""
         p = self.p
@@ -529,11 +676,13 @@ class _Agv:
         h, w = self.occ.shape
         if not (0 <= side[0] < w and 0 <= side[1] < h) or self.occ[int(side[1]), int(side[0])]:
             return False
-        if not (line_of_sight(self.occ, self.pos, side) and line_of_sight(self.occ, side, rejoin)):
+        if not (self.tree.segment_free(self.pos, side) and self.tree.segment_free(side, rejoin)):
             return False
         # pts[0] is the AGV and pts[i] is wps[i - 1]: keep what lies beyond the rejoin point
         if i >= pts.shape[0]:
-            keep_w, keep_t, tag_rejoin = [], [], "goal"
+            keep_w: list[np.ndarray] = []
+            keep_t: list[str] = []
+            tag_rejoin = "goal"
         else:
             keep_w, keep_t, tag_rejoin = self.wps[i - 1:], self.tags[i - 1:], "recovery"
         self.wps = [side, rejoin] + keep_w
@@ -553,21 +702,26 @@ class _Agv:
             return self._set_mode(t, "cruise", p.v_nominal, -1)
         j = int(ids[jj])
         kind, x_pt, arc = self.classify(pts, cum, obs[jj], vel[jj])
-        if j not in self.seen:
-            self.seen.add(j)
+        if j not in self.priority:
+            self.priority[j] = kind
             self.log(t, "crossing", f"obstacle {j}: {kind}")
+        elif self.priority[j] == "agv_first":
+            kind = "agv_first"  # who enters first is decided once, at the crossing
         self.conflict = j
+        order = [("brake", p.v_brake), ("stop", 0.0), ("speed_up", p.v_max)]
         if p.crossing_rules and kind == "agv_first":
-            order = [("speed_up", p.v_max), ("brake", p.v_brake), ("stop", 0.0)]
-        else:
-            order = [("brake", p.v_brake), ("stop", 0.0), ("speed_up", p.v_max)]
-        if p.crossing_rules and kind == "simultaneous" and j not in self.sidestepped:
+            if p.speed_up_to_pass:
+                order = [("speed_up", p.v_max), ("brake", p.v_brake), ("stop", 0.0)]
+            elif sep >= p.collision_distance:  # rule 5-2-1: keep the normal speed
+                return self._set_mode(t, "cruise", p.v_nominal, j)
+        if p.crossing_rules and kind == "simultaneous" and j not in self.sidestepped \
+                and x_pt is not None:
             self.sidestepped.add(j)
             saved = (self.wps, self.tags, len(self.events))
             if self.sidestep(t, pts, cum, x_pt, arc, vel[jj], j):
                 new_pts, new_cum = self.ahead()
                 similar = min(p.v_max, max(p.v_brake, math.hypot(*vel[jj])))
-                for mode, v_t in [("cruise", similar)] + order:
+                for mode, v_t in [("cruise", similar), *order]:
                     s, _ = self.predict(new_pts, new_cum, v_t, obs, vel)
                     if s >= p.safety_distance:
                         return self._set_mode(t, mode, v_t, j)
@@ -601,15 +755,26 @@ class _Agv:
         h, w = self.occ.shape
         ys, xs = np.mgrid[0:h, 0:w]
         near = np.hypot(xs - at[0], ys - at[1]) <= p.static_radius
-        me = (int(round(self.pos[1])), int(round(self.pos[0])))
+        me = (min(max(int(round(self.pos[1])), 0), h - 1),
+              min(max(int(round(self.pos[0])), 0), w - 1))
         near[me] = False
+        gx, gy = self.sc.goal
+        if near[gy, gx]:
+            if j not in self.blocked_logged:
+                self.blocked_logged.add(j)
+                self.log(t, "blocked", f"obstacle {j} stands on the goal "
+                                       f"({gx}, {gy}): wait for it to leave")
+            return
+        saved = (self.occ.copy(), self.static_cells.copy(), self.tree)
         self.static_cells |= near & ~self.occ
         self.occ |= near
+        self.tree = build_tree(self.occ)
         self.static.add(j)
         self.log(t, "static", f"obstacle {j} stood {p.static_after_s:g} s at "
                               f"({at[0]:.1f}, {at[1]:.1f})")
-        if not self.replan(t, at):
-            self.static.discard(j)  # no way around: keep waiting for it to move
+        if not self.replan(t, at):  # no way around: forget it, keep waiting for it to move
+            self.occ, self.static_cells, self.tree = saved
+            self.static.discard(j)
 
     def replan(self, t: float, at: np.ndarray) -> bool:
         """Detour around the new static cells to the first free point of the
@@ -622,18 +787,19 @@ class _Agv:
         near = np.hypot(xy[:, 0] - at[0], xy[:, 1] - at[1])
         start = int(np.argmin(near))
         target, seg_end = None, len(pts) - 1
+        h, w = self.occ.shape
         for k in range(start, len(samples)):
-            c = np.round(xy[k])
+            c = np.clip(np.round(xy[k]), 0, [w - 1, h - 1])
             if near[k] < p.safety_distance + 0.5 or self.occ[int(c[1]), int(c[0])]:
                 continue
             i = min(int(np.searchsorted(cum, samples[k], side="right")), len(pts) - 1)
-            if line_of_sight(self.occ, c, pts[i]):
+            if self.tree.segment_free(c, pts[i]):
                 target, seg_end = c, i
                 break
         if target is None:
             target, seg_end = np.array(self.sc.goal, dtype=float), len(pts)
         try:
-            detour = navigate(self.occ, self.pos, target, turn_weight=p.turn_weight)
+            detour = navigate(self.tree, self.occ, self.pos, target, turn_weight=p.turn_weight)
         except NoPathError as exc:
             self.log(t, "blocked", str(exc))
             return False
@@ -642,16 +808,59 @@ class _Agv:
         if seg_end >= len(pts) or (keep_w and np.allclose(keep_w[0], target)):
             keep_w, keep_t = keep_w[1:], keep_t[1:]
         last = "goal" if not keep_w else "recovery"
-        self.wps = [d for d in detour] + keep_w
+        self.wps = list(detour) + keep_w
         self.tags = ["subgoal"] * (len(detour) - 1) + [last] + keep_t
         self.mode = "replan"
+        self.leg_checked = True
         self.log(t, "replan", f"detour of {len(detour)} sub-goal(s), rejoin the route at "
                               f"({target[0]:.0f}, {target[1]:.0f})")
         return True
 
+    # path following: check points against drift ------------------------------------------
+    def check_point(self, t: float) -> None:
+        """Find the nearest visible corner and fix the position by eq. (3)."""
+        p = self.p
+        if self.vis_tree is None:
+            return
+        near_r, far_r = p.sonar_range
+        rel = self.marks - self.true
+        dist = np.hypot(rel[:, 0], rel[:, 1])
+        true_heading = self.heading + self.bias + self.walk
+        half_fov = math.radians(p.camera_fov_deg) / 2
+        for i in np.argsort(dist, kind="stable"):
+            r = float(dist[i])
+            if r > far_r:
+                return
+            if r < near_r:
+                continue
+            th_true = float(wrap_angle(math.atan2(rel[i, 1], rel[i, 0]) - true_heading))
+            if abs(th_true) >= half_fov:
+                continue
+            seen_at = self.marks[i] - 0.05 * rel[i] / r
+            if not self.vis_tree.segment_free(self.true, seen_at):
+                continue
+            # what the sensor reports: an image column and a depression angle
+            theta_x = round(p.camera_f_px * math.tan(th_true))
+            k_angle = math.atan2(p.camera_height * math.cos(th_true), r)
+            # eq. (3)
+            th = math.atan(theta_x / p.camera_f_px)
+            x_dist = p.camera_height * math.cos(th) / math.tan(k_angle)
+            est = self.marks[i] - x_dist * np.array([math.cos(self.heading + th),
+                                                     math.sin(self.heading + th)])
+            moved = float(np.hypot(*(est - self.pos)))
+            self.pos = est
+            self.log(t, "check_point", f"corner ({self.marks[i, 0]:.1f}, "
+                                       f"{self.marks[i, 1]:.1f}) at X = {x_dist:.2f}, TH = "
+                                       f"{math.degrees(th):.1f} deg: position corrected by "
+                                       f"{moved:.2f}")
+            return
+
     # motion --------------------------------------------------------------------------------
     def move(self, t: float, v_target: float) -> None:
         p = self.p
+        if self.rng is not None:
+            self.walk += math.radians(float(self.rng.normal(0.0, p.drift_walk_deg))) \
+                * math.sqrt(p.dt)
         if self.v < v_target:
             self.v = min(self.v + p.a_max * p.dt, v_target)
         else:
@@ -663,6 +872,7 @@ class _Agv:
             return
         self.waiting = False
         step = self.v * p.dt
+        start = self.pos.copy()
         while step > 0 and self.wps:
             d = self.wps[0] - self.pos
             dist = math.hypot(d[0], d[1])
@@ -670,6 +880,7 @@ class _Agv:
                 self.pos = self.wps.pop(0)
                 tag = self.tags.pop(0)
                 step -= dist
+                self.leg_checked = False
                 frac = 1.0 - step / (self.v * p.dt)
                 if tag in ("subgoal", "sidestep", "recovery"):
                     detail = f"({self.pos[0]:.0f}, {self.pos[1]:.0f})"
@@ -677,63 +888,108 @@ class _Agv:
             else:
                 self.pos = self.pos + d * (step / dist)
                 step = 0.0
+        moved = self.pos - start
+        if moved[0] or moved[1]:
+            self.heading = math.atan2(moved[1], moved[0])
+        if self.rng is None:
+            self.true = self.pos.copy()
+        else:
+            a = self.bias + self.walk
+            c, s = math.cos(a), math.sin(a)
+            k = 1.0 + self.scale
+            self.true = self.true + k * np.array([c * moved[0] - s * moved[1],
+                                                  s * moved[0] + c * moved[1]])
+
+    def in_wall(self) -> bool:
+        """Whether the true position lies in a blocked cell of the global map
+        or off the map."""
+        h, w = self.global_occ.shape
+        x, y = int(round(self.true[0])), int(round(self.true[1]))
+        return not (0 <= x < w and 0 <= y < h) or bool(self.global_occ[y, x])
 
 
-def simulate(scenario: AgvScenario, *, free_time: float | None = None) -> AgvRun:
-    """Run a scenario to success, collision or timeout.
+def simulate(scenario: AgvScenario, *, seed: int | None = None,
+             free_time: float | None = None) -> AgvRun:
+    """Run a scenario to success, collision, timeout or ``no_path``.
 
+    ``seed`` drives the odometry drift (used only with ``params.drift``).
     ``free_time`` is the obstacle-free arrival time if already known (it is
-    otherwise measured by a second run without the moving obstacles).
-
-    Raises:
-        NoPathError: the goal cannot be reached on the static map.
+    otherwise measured by a second run without the moving obstacles and
+    without drift).
     """
+    seed = check_seed(seed, owner="simulate.seed")
+    if not isinstance(scenario, AgvScenario):
+        raise ParameterError(f"simulate needs an AgvScenario, got {type(scenario).__name__}")
     p = scenario.params
-    route = plan_route(scenario.world, scenario.start, scenario.goal, p)
+    check_run_size(p, len(scenario.obstacles))
+    try:
+        route = plan_route(scenario.world, scenario.start, scenario.goal, p,
+                           states=scenario.states)
+    except NoPathError as exc:
+        return _no_path_run(scenario, str(exc), seed)
+    sections = tuple(segment_route(route, build_tree(scenario.routing_map),
+                                   open_leaf=p.open_leaf))
     if free_time is None:
-        free_time = (simulate(replace(scenario, obstacles=()), free_time=0.0).time_s
-                     if scenario.obstacles else None)
-    agv = _Agv(scenario, route)
+        free_time = (simulate(replace(scenario, obstacles=(), params=replace(p, drift=False)),
+                              free_time=0.0).time_s
+                     if scenario.obstacles or p.drift else None)
+    agv = _Agv(scenario, route, seed)
     n_steps = int(math.ceil(p.max_time_s / p.dt))
     times = np.arange(n_steps + 1) * p.dt
     m = len(scenario.obstacles)
     obs_traj = (np.stack([ob.positions(times) for ob in scenario.obstacles])
                 if m else np.zeros((0, n_steps + 1, 2)))
     traj = np.zeros((n_steps + 1, 2))
+    believed = np.zeros((n_steps + 1, 2))
     speeds = np.zeros(n_steps + 1)
     min_sep = math.inf
-    outcome = "timeout"
+    outcome = Outcome.TIMEOUT
+    near_r, far_r = p.sonar_range
     k = 0
     for k in range(n_steps + 1):
         t = times[k]
-        traj[k], speeds[k] = agv.pos, agv.v
+        traj[k], believed[k], speeds[k] = agv.true, agv.pos, agv.v
         now = obs_traj[:, k]
-        dist = np.hypot(now[:, 0] - agv.pos[0], now[:, 1] - agv.pos[1]) if m else np.zeros(0)
+        dist = np.hypot(now[:, 0] - agv.true[0], now[:, 1] - agv.true[1]) if m else np.zeros(0)
         if m:
             min_sep = min(min_sep, float(dist.min()))
             if dist.min() < p.collision_distance:
-                outcome = "collision"
+                outcome = Outcome.COLLISION
                 agv.log(t, "collision", f"obstacle {int(dist.argmin())} at distance "
                                         f"{dist.min():.2f}")
                 break
+        if agv.in_wall():
+            outcome = Outcome.COLLISION
+            agv.log(t, "collision", f"static obstacle at ({agv.true[0]:.2f}, "
+                                    f"{agv.true[1]:.2f}) (drift)")
+            break
         if not agv.wps:
-            outcome = "success"
+            outcome = Outcome.SUCCESS
             agv.log(t, "goal")
             break
         if k == n_steps:
-            agv.log(t, "timeout")
+            agv.log(t, "timeout", f"not at the goal after {p.max_time_s:g} s")
             break
+        if agv.rng is not None and p.check_points and t >= agv.next_check - 1e-9:
+            agv.next_check += p.check_interval_s
+            agv.check_point(t)
+        # what the sonar sees, placed where the AGV believes it is
+        seen = now - (agv.true - agv.pos)
+        vel = (now - obs_traj[:, k - 1]) / p.dt if k else np.zeros_like(now)
+        moving = np.hypot(vel[:, 0], vel[:, 1]) > 1e-9
+        in_range = (dist <= far_r) & (dist >= near_r)
+        if not agv.leg_checked:
+            agv.leg_checked = True
+            ids_all = np.flatnonzero(in_range)
+            agv.check_leg(t, seen[ids_all], ids_all)
         v_target = p.v_nominal
         if p.collision_check and m:
-            vel = (now - obs_traj[:, k - 1]) / p.dt if k else np.zeros_like(now)
-            moving = np.hypot(vel[:, 0], vel[:, 1]) > 1e-9
             for j in list(agv.static):
                 if moving[j]:
                     agv.static.discard(j)
-            ids = np.flatnonzero((dist <= p.sensor_range)
-                                 & ~np.isin(np.arange(m), list(agv.static)))
+            ids = np.flatnonzero(in_range & ~np.isin(np.arange(m), list(agv.static)))
             agv.conflict = -1
-            v_target = agv.decide(t, now[ids], vel[ids], ids)
+            v_target = agv.decide(t, seen[ids], vel[ids], ids)
             j = agv.conflict
             for i in range(m):
                 if i == j and agv.v <= 1e-12 and agv.mode == "stop" and not moving[i]:
@@ -742,7 +998,7 @@ def simulate(scenario: AgvScenario, *, free_time: float | None = None) -> AgvRun
                     agv.stand_time[i] = 0.0
             if j >= 0 and agv.stand_time[j] >= p.static_after_s - 1e-9:
                 agv.stand_time[j] = 0.0
-                agv.make_static(t, j, now[j])
+                agv.make_static(t, j, seen[j])
                 v_target = 0.0
         agv.move(t, v_target)
     n = k + 1
@@ -750,6 +1006,57 @@ def simulate(scenario: AgvScenario, *, free_time: float | None = None) -> AgvRun
         scenario=scenario.name, outcome=outcome, time_s=float(times[k]),
         free_time_s=float(times[k]) if free_time is None else float(free_time),
         min_separation=min_sep, times=times[:n].copy(), trajectory=traj[:n].copy(),
-        speeds=speeds[:n].copy(), obstacle_positions=obs_traj[:, :n].copy(),
-        events=tuple(agv.events), planned_route=route, static_cells=agv.static_cells,
-        world=scenario.world, params=p)
+        believed=believed[:n].copy(), speeds=speeds[:n].copy(),
+        obstacle_positions=obs_traj[:, :n].copy(), events=tuple(agv.events),
+        planned_route=route, sections=sections, static_cells=agv.static_cells,
+        world=scenario.world, params=p, seed=seed)
+
+
+def _no_path_run(scenario: AgvScenario, reason: str, seed: int | None) -> AgvRun:
+    start = np.array([scenario.start], dtype=float)
+    return AgvRun(
+        scenario=scenario.name, outcome=Outcome.NO_PATH, time_s=0.0, free_time_s=math.nan,
+        min_separation=math.inf, times=np.zeros(1), trajectory=start, believed=start.copy(),
+        speeds=np.zeros(1), obstacle_positions=np.zeros((len(scenario.obstacles), 1, 2)),
+        events=(Event(0.0, "no_path", reason),), planned_route=start, sections=(),
+        static_cells=np.zeros(scenario.world.occupancy.shape, dtype=bool),
+        world=scenario.world, params=scenario.params, seed=seed)
+
+
+@register("agv", "agv", stochastic=True,
+          description="AGV of seed 004 among moving obstacles: corner sub-goals on the 2-bit "
+                      "local map, quadtree leg check, t-second collision check, crossing "
+                      "rules, recovery, corner check points against drift")
+def plan(world: GridWorld | AgvScenario, start: Any, goal: Any, *,
+         params: AgvParams | None = None, seed: int | None = None,
+         stop: Any = None) -> PlanResult:
+    """Simulate the AGV from ``start`` to ``goal`` (the planner protocol).
+
+    ``world`` is a :class:`GridWorld` (static map, no moving obstacles) or an
+    :class:`AgvScenario` (its obstacles and local map are used; ``start``,
+    ``goal`` and a given ``params`` replace its own). ``seed`` drives the
+    odometry drift; ``stop`` must be None (the run ends by ``max_time_s``).
+    The result's path is the driven trajectory (simplified); ``outcome`` is
+    success, collision, timeout or no_path; ``info`` holds the run's summary
+    and events.
+    """
+    import time
+
+    seed = check_seed(seed)
+    if stop is not None:
+        raise ParameterError(f"the agv planner is not iterative: stop must be None, "
+                             f"got {stop!r:.80}")
+    if params is not None and not isinstance(params, AgvParams):
+        raise ParameterError(f"agv.plan params must be AgvParams, got {params!r:.80}")
+    if isinstance(world, AgvScenario):
+        sc = replace(world, start=start, goal=goal,
+                     params=world.params if params is None else params)
+    elif isinstance(world, GridWorld):
+        sc = AgvScenario(world.name or "plan", world, start, goal, (),
+                         AgvParams() if params is None else params)
+    else:
+        raise ParameterError(f"agv.plan needs a GridWorld or an AgvScenario, "
+                             f"got {type(world).__name__}")
+    t0 = time.perf_counter()
+    run = simulate(sc, seed=seed)
+    return run.to_plan_result(time.perf_counter() - t0)

@@ -1,15 +1,21 @@
 """Numba kernels of the grid planners (arrays and scalars in, arrays out).
 
-Grids arrive as ``blocked`` uint8/bool arrays indexed ``[y, x]``. Moves follow
-one rule everywhere: a diagonal step needs both side cells free (no corner
-cutting), and a straight segment between cell centres is collision-free when
-it touches no *closed* blocked cell square. The two rules agree: a diagonal
-step touches the shared corner of its two side cells.
+Grids arrive as ``blocked`` uint8/bool arrays indexed ``[y, x]``; cells outside
+the grid count as blocked. Moves follow one rule everywhere: a straight move is
+collision-free when it touches no *closed* blocked cell square. Between cell
+centres that is :func:`segment_hits` (exact integer arithmetic); for the
+driven robot of VFF/VFH it is :func:`move_clear` (the same closed-square test
+in floats). An 8-connected diagonal step touches the shared corner of its two
+side cells, so the rule asks both to be free (no corner cutting). The one
+deliberate exception is the thesis' own 3:4 transform (Fig. 2.4), which may pass
+one blocked corner (``cut``); no planner ever passes between two blocked cells
+that touch at a corner.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -20,16 +26,30 @@ _DY = np.array([0, 0, 1, -1, 1, -1, 1, -1], dtype=np.int64)
 
 
 @njit(cache=True)
-def _step_allowed(blocked, x, y, k):
-    """Whether the move k of the 8-neighbourhood from free cell (x, y) is allowed."""
+def _step_allowed(blocked, x, y, k, cut):
+    """Whether the move k of the 8-neighbourhood from free cell (x, y) is allowed
+    (``cut``: a diagonal may pass one blocked side cell, see :func:`_diagonal_ok`)."""
     h, w = blocked.shape
     nx = x + _DX[k]
     ny = y + _DY[k]
     if nx < 0 or ny < 0 or nx >= w or ny >= h or blocked[ny, nx]:
         return False
-    if k >= 4 and (blocked[y, nx] or blocked[ny, x]):
-        return False
+    if k >= 4:
+        return _diagonal_ok(blocked[y, nx], blocked[ny, x], cut)
     return True
+
+
+@njit(cache=True)
+def _diagonal_ok(side_a, side_b, cut):
+    """A diagonal step with side cells ``side_a``, ``side_b`` (non-zero = blocked).
+
+    Without corner cutting both side cells must be free (the closed-square
+    rule). With it (the thesis' Fig. 2.4), one blocked side cell is allowed,
+    never two: the gap between two blocked cells touching at a corner stays shut.
+    """
+    if side_a and side_b:
+        return False
+    return cut or not (side_a or side_b)
 
 
 @njit(cache=True)
@@ -45,7 +65,7 @@ def _padded(blocked):
 
 
 @njit(cache=True)
-def _relax_all(pad, w2, u, d, w_side, w_diag, dist, seen, settled, stamp, nbr, cost):
+def _relax_all(pad, w2, u, d, w_side, w_diag, cut, dist, seen, settled, stamp, nbr, cost):
     """Fill ``nbr``/``cost`` with the allowed, unsettled, improved neighbours of
     ``u`` (padded index, value ``d``), updating ``dist``/``seen``; return how many."""
     m = 0
@@ -55,7 +75,7 @@ def _relax_all(pad, w2, u, d, w_side, w_diag, dist, seen, settled, stamp, nbr, c
         v = u + sx + sy
         if pad[v] or settled[v] == stamp:
             continue
-        if k >= 4 and (pad[u + sx] or pad[u + sy]):
+        if k >= 4 and not _diagonal_ok(pad[u + sx], pad[u + sy], cut):
             continue
         nd = d + (w_side if k < 4 else w_diag)
         if seen[v] != stamp or nd < dist[v]:
@@ -68,7 +88,8 @@ def _relax_all(pad, w2, u, d, w_side, w_diag, dist, seen, settled, stamp, nbr, c
 
 
 @njit(cache=True)
-def _propagate(pad, w2, src, w_side, w_diag, targets, dist, seen, settled, want, stamp, ring):
+def _propagate(pad, w2, src, w_side, w_diag, cut, targets, dist, seen, settled, want, stamp,
+               ring):
     """Goal-rooted propagation on a padded grid into caller-owned buffers.
 
     Dinitz's bucket queue instead of a heap: bucket ``b`` holds cells whose
@@ -114,7 +135,8 @@ def _propagate(pad, w2, src, w_side, w_diag, targets, dist, seen, settled, want,
             n_want -= 1
             if n_want == 0:
                 break
-        m = _relax_all(pad, w2, u, dist[u], w_side, w_diag, dist, seen, settled, stamp, nbr, cost)
+        m = _relax_all(pad, w2, u, dist[u], w_side, w_diag, cut, dist, seen, settled, stamp, nbr,
+                       cost)
         for i in range(m):
             target = int(cost[i] / w_side) % n_ring
             if sizes[target] == ring.shape[1]:
@@ -199,7 +221,8 @@ def _focused(pad, w2, src, dst, w_side, w_diag, dist, seen, settled, stamp, heap
         settled[u] = stamp
         if u == dst:
             return dist[u], (keys, items)
-        m = _relax_all(pad, w2, u, dist[u], w_side, w_diag, dist, seen, settled, stamp, nbr, cost)
+        m = _relax_all(pad, w2, u, dist[u], w_side, w_diag, False, dist, seen, settled, stamp,
+                       nbr, cost)
         for i in range(m):
             v = nbr[i]
             ax = abs(v % w2 - tx)
@@ -244,8 +267,8 @@ def landmark_fields(blocked, w_side, w_diag, n_marks):
     for j in range(n_marks):
         if src < 0:
             return marks[:j].copy()
-        ring = _propagate(pad, w2, src, w_side, w_diag, none, dist, seen, settled, want, j + 1,
-                          ring)
+        ring = _propagate(pad, w2, src, w_side, w_diag, False, none, dist, seen, settled, want,
+                          j + 1, ring)
         far = -1
         far_d = -1.0
         for v in range(n2):
@@ -261,7 +284,7 @@ def landmark_fields(blocked, w_side, w_diag, n_marks):
 
 
 @njit(cache=True)
-def chamfer_field(blocked, gx, gy, w_side, w_diag, targets):
+def chamfer_field(blocked, gx, gy, w_side, w_diag, cut, targets):
     """Goal-rooted distance transform on the 8-connected grid.
 
     Side steps cost ``w_side`` and diagonal steps ``w_diag`` (3 and 4 for the
@@ -282,8 +305,8 @@ def chamfer_field(blocked, gx, gy, w_side, w_diag, targets):
     want = np.zeros(n2, dtype=np.int32)
     ptargets = (targets // w + 1) * w2 + targets % w + 1
     ring = np.empty((int(w_diag / w_side) + 2, 1024), dtype=np.int64)
-    _propagate(pad, w2, (gy + 1) * w2 + gx + 1, w_side, w_diag, ptargets, dist, seen, settled,
-               want, 1, ring)
+    _propagate(pad, w2, (gy + 1) * w2 + gx + 1, w_side, w_diag, cut, ptargets, dist, seen,
+               settled, want, 1, ring)
     out = np.full((h, w), np.inf)
     for y in range(h):
         for x in range(w):
@@ -331,8 +354,8 @@ def octile_queries(blocked, goals, starts, w_side, w_diag, focused, marks):
         j = i
         while j < m and pgoals[j] == pgoals[i]:
             j += 1
-        ring = _propagate(pad, w2, pgoals[i], w_side, w_diag, pstarts[i:j], dist, seen, settled,
-                          want, stamp, ring)
+        ring = _propagate(pad, w2, pgoals[i], w_side, w_diag, False, pstarts[i:j], dist, seen,
+                          settled, want, stamp, ring)
         for r in range(i, j):
             out[r] = dist[pstarts[r]] if settled[pstarts[r]] == stamp else np.inf
         i = j
@@ -340,7 +363,7 @@ def octile_queries(blocked, goals, starts, w_side, w_diag, focused, marks):
 
 
 @njit(cache=True)
-def descend(blocked, dist, sx, sy, w_side, w_diag):
+def descend(blocked, dist, sx, sy, w_side, w_diag, cut):
     """Steepest descent on a chamfer/octile field from (sx, sy) to its zero.
 
     Each step goes to the allowed neighbour minimising value + step cost, i.e.
@@ -361,7 +384,7 @@ def descend(blocked, dist, sx, sy, w_side, w_diag):
         best_val = np.inf
         bx, by = -1, -1
         for k in range(8):
-            if not _step_allowed(blocked, x, y, k):
+            if not _step_allowed(blocked, x, y, k, cut):
                 continue
             nx = x + _DX[k]
             ny = y + _DY[k]
@@ -518,14 +541,155 @@ def visibility_descend(blocked, dist, sx, sy):
     return out[:k_out].copy()
 
 
+@njit(cache=True)
+def visibility_levels(blocked, gx, gy):
+    """The thesis' own MDT fill (section 2.2.4), level by level.
+
+    Level 1: every free cell that sees the goal gets its straight-line
+    distance. Level k + 1: every still empty free cell that sees a level-k cell
+    gets ``min(value + segment length)`` over the level-k cells it sees. A
+    filled cell is never revisited, so the values are upper bounds of the exact
+    any-angle distances (:func:`visibility_field`), equal where the best chain
+    also has the fewest segments. Returns the (h, w) field (``inf`` blocked or
+    unreachable).
+    """
+    h, w = blocked.shape
+    n_free = 0
+    for y in range(h):
+        for x in range(w):
+            if not blocked[y, x]:
+                n_free += 1
+    xs = np.empty(n_free, dtype=np.int64)
+    ys = np.empty(n_free, dtype=np.int64)
+    k = 0
+    src = -1
+    for y in range(h):
+        for x in range(w):
+            if not blocked[y, x]:
+                xs[k] = x
+                ys[k] = y
+                if x == gx and y == gy:
+                    src = k
+                k += 1
+    value = np.full(n_free, np.inf)
+    new_value = np.full(n_free, np.inf)
+    frontier = np.empty(n_free, dtype=np.int64)
+    nxt = np.empty(n_free, dtype=np.int64)
+    value[src] = 0.0
+    frontier[0] = src
+    n_front = 1
+    while n_front > 0:
+        n_next = 0
+        for c in range(n_free):
+            if value[c] < np.inf:
+                continue
+            best = np.inf
+            for f in range(n_front):
+                u = frontier[f]
+                ddx = xs[c] - xs[u]
+                ddy = ys[c] - ys[u]
+                nd = value[u] + math.sqrt(ddx * ddx + ddy * ddy)
+                if nd < best and segment_hits(blocked, xs[u], ys[u], xs[c], ys[c], True) == 0:
+                    best = nd
+            if best < np.inf:
+                new_value[c] = best
+                nxt[n_next] = c
+                n_next += 1
+        for f in range(n_next):
+            value[nxt[f]] = new_value[nxt[f]]
+        frontier[:n_next] = nxt[:n_next]
+        n_front = n_next
+    out = np.full((h, w), np.inf)
+    for i in range(n_free):
+        out[ys[i], xs[i]] = value[i]
+    return out
+
+
+@njit(cache=True)
+def descend_least_visible(blocked, dist, sx, sy):
+    """The thesis' step 5: from (sx, sy) jump to the visible cell of least
+    value (ties: the nearer one) until the zero cell. Every cell of a level
+    field sees the cell it was filled from, which holds a smaller value, so
+    each jump lowers the value and the walk ends."""
+    h, w = blocked.shape
+    if not math.isfinite(dist[sy, sx]):
+        return np.zeros((0, 2), dtype=np.int64)
+    out = np.empty((h * w + 1, 2), dtype=np.int64)
+    x, y = sx, sy
+    out[0, 0] = x
+    out[0, 1] = y
+    k_out = 1
+    while dist[y, x] > 0.0 and k_out <= h * w:
+        best_val = dist[y, x]
+        best_len = np.inf
+        bx, by = -1, -1
+        for ny in range(h):
+            for nx in range(w):
+                val = dist[ny, nx]
+                if val > best_val:
+                    continue
+                ddx = nx - x
+                ddy = ny - y
+                seg = math.sqrt(ddx * ddx + ddy * ddy)
+                if seg == 0.0 or (val == best_val and seg >= best_len):
+                    continue
+                if segment_hits(blocked, x, y, nx, ny, True) == 0:
+                    best_val = val
+                    best_len = seg
+                    bx, by = nx, ny
+        if bx < 0 or not best_val < dist[y, x]:
+            return np.zeros((0, 2), dtype=np.int64)
+        x, y = bx, by
+        out[k_out, 0] = x
+        out[k_out, 1] = y
+        k_out += 1
+    return out[:k_out].copy()
+
+
 # -- local planners: a simulated robot with a certainty grid ---------------------------
 # Outcome codes of vff_run / vfh_run.
 REACHED, COLLISION, LOCAL_MINIMUM, OSCILLATION, STEP_LIMIT, NO_VALLEY = range(6)
 
 
+class RobotKernelParams(NamedTuple):
+    """The simulated robot of VFF and VFH as the kernels read it (angles in rad)."""
+
+    window: float
+    speed: float
+    max_turn: float
+    max_steps: int
+    goal_tolerance: float
+    stall_steps: int
+    stall_gain: float
+    stall_radius: float
+    certainty_increment: float
+    certainty_max: float
+
+
+class VFFKernelParams(NamedTuple):
+    """VFF force constants (eq. 2.1-2.6) as :func:`vff_run` reads them."""
+
+    f_cr: float
+    f_ct: float
+    k_s: float
+
+
+class VFHKernelParams(NamedTuple):
+    """VFH histogram constants (eq. 2.7-2.11) as :func:`vfh_run` reads them (alpha in rad)."""
+
+    alpha: float
+    a: float
+    b: float
+    smoothing: int
+    centre_weight: float
+    threshold: float
+    s_max: int
+
+
 @njit(cache=True)
-def _wrap(angle):
-    """Angle in [-pi, pi)."""
+def wrap(angle):
+    """Angle in [-pi, pi): the numba twin of :func:`subtask_opt.base.geometry.wrap_angle`
+    (which numba cannot compile); a test checks that the two agree."""
     return angle - 2.0 * math.pi * math.floor((angle + math.pi) / (2.0 * math.pi))
 
 
@@ -544,62 +708,111 @@ def _sense(blocked, certainty, x, y, radius, increment, c_max):
 
 
 @njit(cache=True)
-def _move(blocked, traj, step, heading, speed):
-    """Advance one step along ``heading``; return False on a collision."""
-    h, w = blocked.shape
-    x = traj[step - 1, 0] + speed * math.cos(heading)
-    y = traj[step - 1, 1] + speed * math.sin(heading)
-    traj[step, 0] = x
-    traj[step, 1] = y
-    cx = int(math.floor(x + 0.5))
-    cy = int(math.floor(y + 0.5))
-    return 0 <= cx < w and 0 <= cy < h and not blocked[cy, cx]
+def _touches_box(x0, y0, x1, y1, lo_x, lo_y, hi_x, hi_y):
+    """Whether the segment (x0, y0)-(x1, y1) meets the closed box (Liang-Barsky)."""
+    t0 = 0.0
+    t1 = 1.0
+    dx = x1 - x0
+    dy = y1 - y0
+    if dx == 0.0:
+        if x0 < lo_x or x0 > hi_x:
+            return False
+    else:
+        ta = (lo_x - x0) / dx
+        tb = (hi_x - x0) / dx
+        t0 = max(t0, min(ta, tb))
+        t1 = min(t1, max(ta, tb))
+    if dy == 0.0:
+        if y0 < lo_y or y0 > hi_y:
+            return False
+    else:
+        ta = (lo_y - y0) / dy
+        tb = (hi_y - y0) / dy
+        t0 = max(t0, min(ta, tb))
+        t1 = min(t1, max(ta, tb))
+    return t0 <= t1
 
 
 @njit(cache=True)
-def _stall(traj, step, gx, gy, best_d, last_gain, window, min_gain):
+def move_clear(blocked, x0, y0, x1, y1):
+    """Whether the straight move (x0, y0) -> (x1, y1) touches no closed blocked
+    cell square (cells outside the grid count as blocked): the rule of
+    :func:`segment_hits`, for points anywhere in the plane."""
+    h, w = blocked.shape
+    i_lo = int(math.ceil(min(x0, x1) - 0.5))
+    i_hi = int(math.floor(max(x0, x1) + 0.5))
+    j_lo = int(math.ceil(min(y0, y1) - 0.5))
+    j_hi = int(math.floor(max(y0, y1) + 0.5))
+    for j in range(j_lo, j_hi + 1):
+        for i in range(i_lo, i_hi + 1):
+            if 0 <= i < w and 0 <= j < h and not blocked[j, i]:
+                continue
+            if _touches_box(x0, y0, x1, y1, i - 0.5, j - 0.5, i + 0.5, j + 0.5):
+                return False
+    return True
+
+
+@njit(cache=True)
+def _move(blocked, traj, step, heading, speed):
+    """Advance one step along ``heading``; return False on a collision (the
+    step touches a closed blocked square, :func:`move_clear`)."""
+    x0 = traj[step - 1, 0]
+    y0 = traj[step - 1, 1]
+    x = x0 + speed * math.cos(heading)
+    y = y0 + speed * math.sin(heading)
+    traj[step, 0] = x
+    traj[step, 1] = y
+    return move_clear(blocked, x0, y0, x, y)
+
+
+@njit(cache=True)
+def _arrived(blocked, x, y, gx, gy, tol):
+    """Within ``tol`` of the goal centre and able to drive straight onto it."""
+    return math.hypot(gx - x, gy - y) <= tol and move_clear(blocked, x, y, gx, gy)
+
+
+@njit(cache=True)
+def _stall(traj, step, gx, gy, best_d, last_gain, robot):
     """Stall test after ``step``: returns (code or -1, best distance, step of last gain).
 
     A run stalls when the distance to the goal has not improved by
-    ``min_gain`` cells for ``window`` steps: a local minimum if the robot
-    also stayed within one cell of where it was ``window`` steps ago, an
-    oscillation (a loop or back-and-forth) otherwise.
+    ``robot.stall_gain`` cells for ``robot.stall_steps`` steps: a local minimum
+    if the robot also stayed within ``robot.stall_radius`` of where it was
+    then, an oscillation (a loop or back-and-forth) otherwise.
     """
     d = math.hypot(traj[step, 0] - gx, traj[step, 1] - gy)
-    if d < best_d - min_gain:
+    if d < best_d - robot.stall_gain:
         return -1, d, step
-    if step - last_gain >= window:
-        back = step - window
+    if step - last_gain >= robot.stall_steps:
+        back = step - robot.stall_steps
         moved = math.hypot(traj[step, 0] - traj[back, 0], traj[step, 1] - traj[back, 1])
-        return (LOCAL_MINIMUM if moved < 1.0 else OSCILLATION), best_d, last_gain
+        return (LOCAL_MINIMUM if moved < robot.stall_radius else OSCILLATION), best_d, last_gain
     return -1, best_d, last_gain
 
 
 @njit(cache=True)
-def vff_run(blocked, sx, sy, gx, gy, p):
+def vff_run(blocked, sx, sy, gx, gy, robot, force):
     """Virtual force field (Borenstein & Koren 1989), eq. 2.1-2.6.
 
-    ``p`` = [window radius, Fcr, Fct, Ks, max turn (rad/step), speed
-    (cells/step), max steps, goal tolerance, stall window, stall gain,
-    certainty increment, certainty max]. Returns (outcome code, trajectory).
+    ``robot`` is a :class:`RobotKernelParams`, ``force`` a
+    :class:`VFFKernelParams`. Returns (outcome code, trajectory).
     """
-    radius, f_cr, f_ct, k_s, max_turn, speed = p[0], p[1], p[2], p[3], p[4], p[5]
-    max_steps, tol, s_window, s_gain, c_inc, c_max = int(p[6]), p[7], int(p[8]), p[9], p[10], p[11]
+    radius = robot.window
     h, w = blocked.shape
     certainty = np.zeros((h, w))
-    traj = np.empty((max_steps + 1, 2))
+    traj = np.empty((robot.max_steps + 1, 2))
     traj[0, 0] = sx
     traj[0, 1] = sy
     heading = math.atan2(gy - sy, gx - sx)
     best_d = math.hypot(gx - sx, gy - sy)
     last_gain = 0
     r = int(math.ceil(radius))
-    for step in range(1, max_steps + 1):
+    for step in range(1, robot.max_steps + 1):
         x = traj[step - 1, 0]
         y = traj[step - 1, 1]
-        if math.hypot(gx - x, gy - y) <= tol:
+        if _arrived(blocked, x, y, gx, gy, robot.goal_tolerance):
             return REACHED, traj[:step].copy()
-        _sense(blocked, certainty, x, y, radius, c_inc, c_max)
+        _sense(blocked, certainty, x, y, radius, robot.certainty_increment, robot.certainty_max)
         fx = 0.0
         fy = 0.0
         cx = int(math.floor(x + 0.5))
@@ -614,32 +827,35 @@ def vff_run(blocked, sx, sy, gx, gy, p):
                 d = math.hypot(dx, dy)
                 if d <= 1e-9 or d > radius:
                     continue
-                mag = f_cr * c / (d * d)  # eq. 2.1, along the unit vector cell -> robot
+                mag = force.f_cr * c / (d * d)  # eq. 2.1, along the unit vector cell -> robot
                 fx += mag * dx / d
                 fy += mag * dy / d
-        dg = math.hypot(gx - x, gy - y)
-        rx = fx + f_ct * (gx - x) / dg  # eq. 2.3, 2.4
-        ry = fy + f_ct * (gy - y) / dg
+        dg = max(math.hypot(gx - x, gy - y), 1e-12)
+        rx = fx + force.f_ct * (gx - x) / dg  # eq. 2.3, 2.4
+        ry = fy + force.f_ct * (gy - y) / dg
         delta = math.atan2(ry, rx)
-        omega = k_s * _wrap(delta - heading)  # eq. 2.5, 2.6
-        heading = _wrap(heading + max(-max_turn, min(max_turn, omega)))
-        if not _move(blocked, traj, step, heading, speed):
+        omega = force.k_s * wrap(delta - heading)  # eq. 2.5, 2.6
+        heading = wrap(heading + max(-robot.max_turn, min(robot.max_turn, omega)))
+        if not _move(blocked, traj, step, heading, robot.speed):
             return COLLISION, traj[: step + 1].copy()
-        code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, s_window, s_gain)
+        code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, robot)
         if code >= 0:
             return code, traj[: step + 1].copy()
-    if math.hypot(gx - traj[max_steps, 0], gy - traj[max_steps, 1]) <= tol:
+    n = robot.max_steps
+    if _arrived(blocked, traj[n, 0], traj[n, 1], gx, gy, robot.goal_tolerance):
         return REACHED, traj
     return STEP_LIMIT, traj
 
 
 @njit(cache=True)
-def polar_histogram(certainty, x, y, radius, n_sectors, a, b, l_smooth):
+def polar_histogram(certainty, x, y, radius, n_sectors, a, b, l_smooth, centre_weight):
     """Smoothed polar obstacle density around (x, y), eq. 2.7-2.11.
 
     Each cell within ``radius`` adds ``m = C^2 (a - b d)`` to the sector of
-    its direction ``beta`` (eq. 2.7-2.10); the result is smoothed with
-    weights 1, 2, ..., l+1, ..., 2, 1 over 2l+1 sectors (eq. 2.11).
+    its direction ``beta`` (eq. 2.7-2.10). Smoothing (eq. 2.11): sector
+    ``k + i`` (``0 < |i| <= l``) gets weight ``l + 1 - |i|`` (1, 2, ... from the
+    ends, as printed), sector ``k`` gets ``centre_weight``, and the sum is
+    divided by ``2l + 1``.
     """
     h, w = certainty.shape
     hist = np.zeros(n_sectors)
@@ -663,9 +879,9 @@ def polar_histogram(certainty, x, y, radius, n_sectors, a, b, l_smooth):
     smooth = np.zeros(n_sectors)
     norm = 2 * l_smooth + 1
     for k in range(n_sectors):
-        s = 0.0
-        for i in range(-l_smooth, l_smooth + 1):
-            s += (l_smooth + 1 - abs(i)) * hist[(k + i) % n_sectors]
+        s = centre_weight * hist[k]
+        for i in range(1, l_smooth + 1):
+            s += (l_smooth + 1 - i) * (hist[(k + i) % n_sectors] + hist[(k - i) % n_sectors])
         smooth[k] = s / norm
     return smooth
 
@@ -715,48 +931,47 @@ def vfh_steer(smooth, target_sector, threshold, s_max):
 
 
 @njit(cache=True)
-def vfh_run(blocked, sx, sy, gx, gy, p):
+def vfh_run(blocked, sx, sy, gx, gy, robot, hist):
     """Vector field histogram (Borenstein & Koren 1991), eq. 2.7-2.11.
 
-    ``p`` = [window radius, alpha (rad), a, b, l, threshold, s_max, max turn
-    (rad/step), speed, max steps, goal tolerance, stall window, stall gain,
-    certainty increment, certainty max]. Returns (outcome code, trajectory).
+    ``robot`` is a :class:`RobotKernelParams`, ``hist`` a
+    :class:`VFHKernelParams`. Returns (outcome code, trajectory).
     """
-    radius, alpha, a, b, l_smooth, threshold = p[0], p[1], p[2], p[3], int(p[4]), p[5]
-    s_max, max_turn, speed, max_steps = int(p[6]), p[7], p[8], int(p[9])
-    tol, s_window, s_gain, c_inc, c_max = p[10], int(p[11]), p[12], p[13], p[14]
+    radius = robot.window
     h, w = blocked.shape
-    n_sectors = int(round(2.0 * math.pi / alpha))  # eq. 2.9
+    n_sectors = int(round(2.0 * math.pi / hist.alpha))  # eq. 2.9
     width = 2.0 * math.pi / n_sectors
     certainty = np.zeros((h, w))
-    traj = np.empty((max_steps + 1, 2))
+    traj = np.empty((robot.max_steps + 1, 2))
     traj[0, 0] = sx
     traj[0, 1] = sy
     heading = math.atan2(gy - sy, gx - sx)
     best_d = math.hypot(gx - sx, gy - sy)
     last_gain = 0
-    for step in range(1, max_steps + 1):
+    for step in range(1, robot.max_steps + 1):
         x = traj[step - 1, 0]
         y = traj[step - 1, 1]
-        if math.hypot(gx - x, gy - y) <= tol:
+        if _arrived(blocked, x, y, gx, gy, robot.goal_tolerance):
             return REACHED, traj[:step].copy()
-        _sense(blocked, certainty, x, y, radius, c_inc, c_max)
-        smooth = polar_histogram(certainty, x, y, radius, n_sectors, a, b, l_smooth)
+        _sense(blocked, certainty, x, y, radius, robot.certainty_increment, robot.certainty_max)
+        smooth = polar_histogram(certainty, x, y, radius, n_sectors, hist.a, hist.b,
+                                 hist.smoothing, hist.centre_weight)
         to_goal = math.atan2(gy - y, gx - x)
         if to_goal < 0.0:
             to_goal += 2.0 * math.pi
         kt = int(to_goal / width) % n_sectors
-        k = vfh_steer(smooth, kt, threshold, s_max)
+        k = vfh_steer(smooth, kt, hist.threshold, hist.s_max)
         if k == -1.0:
             return NO_VALLEY, traj[:step].copy()
         want = to_goal if k == float(kt) else (k + 0.5) * width
-        turn = _wrap(want - heading)
-        heading = _wrap(heading + max(-max_turn, min(max_turn, turn)))
-        if not _move(blocked, traj, step, heading, speed):
+        turn = wrap(want - heading)
+        heading = wrap(heading + max(-robot.max_turn, min(robot.max_turn, turn)))
+        if not _move(blocked, traj, step, heading, robot.speed):
             return COLLISION, traj[: step + 1].copy()
-        code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, s_window, s_gain)
+        code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, robot)
         if code >= 0:
             return code, traj[: step + 1].copy()
-    if math.hypot(gx - traj[max_steps, 0], gy - traj[max_steps, 1]) <= tol:
+    n = robot.max_steps
+    if _arrived(blocked, traj[n, 0], traj[n, 1], gx, gy, robot.goal_tolerance):
         return REACHED, traj
     return STEP_LIMIT, traj

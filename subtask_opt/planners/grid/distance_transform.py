@@ -1,25 +1,29 @@
 """Distance transforms on occupancy grids (Jarvis), and the any-angle
-"modified distance transform" of the thesis.
+"modified distance transform" (MDT) of the thesis.
 
 The transform is rooted at the goal: every free cell gets its distance to the
 goal, so one field serves any number of starts (:func:`distance_field`), and a
 path is the steepest descent on it (:func:`path_from_field`).
 
-Metrics (``DTParams.metric``):
+Registered planners (family ``"grid"``):
 
-* ``"chamfer34"`` - the thesis' integer weights, 3 for a side step and 4 for a
-  diagonal (3:4 approximates 1:sqrt(2)); the field is reported in cells
-  (value / 3).
-* ``"octile"`` - exact 8-connected distances, 1 and sqrt(2). This is the
-  MovingAI benchmark metric.
-* ``"anyangle"`` - the modified distance transform (MDT): the true Euclidean
-  length of the shortest chain of collision-free straight segments between
-  free cell centres (Dijkstra on the line-of-sight graph).
+* ``dt`` - the thesis' 3:4 chamfer transform (side step 3, diagonal 4; the
+  field is reported in cells, value / 3). By default a diagonal step may pass
+  one blocked corner, as in the thesis' worked example (Fig. 2.4, built in as
+  map ``fig2.4``); ``DTParams(corner_cutting=False)`` forbids it.
+* ``dt-octile`` - exact 8-connected distances, 1 and sqrt(2), no corner
+  cutting: the MovingAI benchmark metric.
+* ``mdt`` - the modified distance transform: the Euclidean length of the
+  shortest chain of collision-free straight segments between free cell
+  centres. ``MDTParams(fill="exact")`` (default) is Dijkstra on the
+  line-of-sight graph; ``fill="levels"`` is the thesis' own procedure
+  (section 2.2.4: level 1 = cells that see the goal, level k + 1 = cells that
+  see a level-k cell, never revisited), which can be longer.
 
-Both 8-connected metrics forbid corner cutting (a diagonal step needs both
-side cells free); a segment is collision-free when it touches no closed
-blocked cell, so every 8-connected path is also an any-angle path and the MDT
-is never longer than either distance transform.
+No move ever passes between two blocked cells that touch at a corner; apart
+from the chamfer option above, a move touches no closed blocked square (see
+:mod:`._kernels`), so every 8-connected path is also an any-angle path and the
+exact MDT is never longer than either transform.
 """
 
 from __future__ import annotations
@@ -32,34 +36,70 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, require_int
-from subtask_opt.base.results import PlanResult
+from subtask_opt.base.results import Outcome, PlanResult
+from subtask_opt.planners.base import register
 from subtask_opt.planners.grid import _kernels as K
-from subtask_opt.planners.grid.world import GridWorld
+from subtask_opt.planners.grid.world import GridWorld, check_small_grid
 
 METRICS = ("chamfer34", "octile", "anyangle")
+"""Metrics of :func:`distance_field`."""
+DT_METRICS = ("chamfer34", "octile")
+"""Metrics of :class:`DTParams` (the 8-connected transforms)."""
+FILLS = ("exact", "levels")
+"""Fills of :class:`MDTParams`."""
 _EMPTY_TARGETS = np.zeros(0, dtype=np.int64)
 
 
 @dataclass(frozen=True)
 class DTParams:
-    """Options of :func:`plan`.
+    """Options of the 8-connected transforms (planners ``dt`` and ``dt-octile``).
 
     Attributes:
-        metric: ``"chamfer34"`` (thesis DT), ``"octile"`` (exact 8-connected)
-            or ``"anyangle"`` (the modified distance transform).
-        max_free_cells: the any-angle transform checks every pair of free
-            cells (O(n^2) line-of-sight tests); grids with more free cells are
-            refused rather than left running for hours.
+        metric: ``"chamfer34"`` (thesis DT, 3:4) or ``"octile"`` (exact 1 : sqrt 2).
+        corner_cutting: whether a diagonal step may pass one blocked side
+            cell; ``None`` picks the metric's convention: True for
+            ``chamfer34`` (the thesis' Fig. 2.4), False for ``octile`` (MovingAI).
     """
 
     metric: str = "chamfer34"
+    corner_cutting: bool | None = None
+
+    def __post_init__(self) -> None:
+        if self.metric not in DT_METRICS:
+            raise ParameterError(
+                f"DTParams.metric must be one of {', '.join(DT_METRICS)}, got {self.metric!r}")
+        if self.corner_cutting is not None and not isinstance(self.corner_cutting, bool):
+            raise ParameterError(f"DTParams.corner_cutting must be True, False or None, "
+                                 f"got {self.corner_cutting!r}")
+
+    @property
+    def cuts_corners(self) -> bool:
+        """The effective corner-cutting rule."""
+        if self.corner_cutting is None:
+            return self.metric == "chamfer34"
+        return self.corner_cutting
+
+
+@dataclass(frozen=True)
+class MDTParams:
+    """Options of the modified distance transform (planner ``mdt``).
+
+    Attributes:
+        fill: ``"exact"`` (Dijkstra on the line-of-sight graph) or
+            ``"levels"`` (the thesis' level-by-level fill).
+        max_free_cells: both fills test pairs of free cells for line of sight
+            (O(n^2) tests); grids with more free cells are refused rather than
+            left running for hours.
+    """
+
+    fill: str = "exact"
     max_free_cells: int = 20000
 
     def __post_init__(self) -> None:
-        if self.metric not in METRICS:
+        if self.fill not in FILLS:
             raise ParameterError(
-                f"DTParams.metric must be one of {', '.join(METRICS)}, got {self.metric!r}")
-        require_int("DTParams", "max_free_cells", self.max_free_cells, 1)
+                f"MDTParams.fill must be one of {', '.join(FILLS)}, got {self.fill!r}")
+        require_int("MDTParams", "max_free_cells", self.max_free_cells, 1)
 
 
 def _weights(metric: str) -> tuple[float, float, float]:
@@ -74,31 +114,36 @@ def _blocked(world: GridWorld) -> np.ndarray:
 
 
 def distance_field(world: GridWorld, goal: Any, metric: str = "octile", *,
+                   corner_cutting: bool | None = None, fill: str = "exact",
                    stop_at: Any = None, max_free_cells: int = 20000) -> np.ndarray:
     """Distance from every cell to ``goal``, shape (height, width), in cells.
 
-    Blocked and unreachable cells hold ``inf``. ``stop_at`` (an iterable of
-    cells (x, y), 8-connected metrics only) ends the transform as soon as those
-    cells are final, which is what a single query needs; cells not yet final
-    then hold ``inf``. ``max_free_cells`` bounds the any-angle
-    transform (see :class:`DTParams`).
+    Blocked and unreachable cells hold ``inf``. ``corner_cutting`` applies to
+    the 8-connected metrics (see :class:`DTParams`), ``fill`` and
+    ``max_free_cells`` to ``"anyangle"`` (see :class:`MDTParams`).
+    ``stop_at`` (an iterable of cells (x, y), 8-connected metrics only) ends
+    the transform as soon as those cells are final, which is what a single
+    query needs; cells not yet final then hold ``inf``.
 
     Raises:
         UnreachableError: ``goal`` (or a ``stop_at`` cell) outside the grid or blocked.
         ParameterError: unknown ``metric``, or an any-angle grid over ``max_free_cells``.
     """
-    DTParams(metric, max_free_cells)
+    if metric not in METRICS:
+        raise ParameterError(f"distance_field: metric must be one of {', '.join(METRICS)}, "
+                             f"got {metric!r}")
     gx, gy = world.check_cell("goal", goal)
     blocked = _blocked(world)
     if metric == "anyangle":
+        MDTParams(fill, max_free_cells)
         if stop_at is not None:
             raise ParameterError("distance_field: stop_at is only for the 8-connected metrics")
-        n_free = int(np.count_nonzero(~world.occupancy))
-        if n_free > max_free_cells:
-            raise ParameterError(
-                f"the any-angle transform checks every pair of free cells; this grid has "
-                f"{n_free} free cells, more than max_free_cells={max_free_cells}")
+        check_small_grid(world, max_free_cells, "the any-angle transform checks every pair "
+                                                "of free cells")
+        if fill == "levels":
+            return K.visibility_levels(blocked, gx, gy)
         return K.visibility_field(blocked, gx, gy)
+    cut = DTParams(metric, corner_cutting).cuts_corners
     targets = _EMPTY_TARGETS
     if stop_at is not None:
         cells = [world.check_cell("stop_at cell", c) for c in stop_at]
@@ -107,20 +152,26 @@ def distance_field(world: GridWorld, goal: Any, metric: str = "octile", *,
             # an empty request means "nothing is needed", not "the whole field"
             return np.full(world.occupancy.shape, np.inf)
     side, diag, scale = _weights(metric)
-    field = K.chamfer_field(blocked, gx, gy, side, diag, targets)
+    field = K.chamfer_field(blocked, gx, gy, side, diag, cut, targets)
     if scale != 1.0:
         field /= scale
     return field
 
 
 def path_from_field(world: GridWorld, field: np.ndarray, start: Any,
-                    metric: str = "octile") -> np.ndarray:
+                    metric: str = "octile", *, corner_cutting: bool | None = None,
+                    fill: str = "exact") -> np.ndarray:
     """Steepest-descent path from ``start`` down ``field`` to its zero cell.
 
-    Returns a (k, 2) int array of cells (x, y), start first; empty when the
-    start cannot reach the goal (``inf`` value).
+    8-connected metrics: to the neighbour the value came from. ``anyangle``:
+    ``fill="exact"`` jumps to the visible cell that realises the value (the
+    path has the field's length); ``fill="levels"`` follows the thesis' step 5
+    (jump to the visible cell of least value). Returns a (k, 2) int array of
+    cells (x, y), start first; empty when the start cannot reach the goal.
     """
-    DTParams(metric)
+    if metric not in METRICS:
+        raise ParameterError(f"path_from_field: metric must be one of {', '.join(METRICS)}, "
+                             f"got {metric!r}")
     sx, sy = world.check_cell("start", start)
     field = np.asarray(field, dtype=np.float64)
     if field.shape != world.occupancy.shape:
@@ -128,41 +179,100 @@ def path_from_field(world: GridWorld, field: np.ndarray, start: Any,
             f"field shape {field.shape} does not match the grid {world.occupancy.shape}")
     blocked = _blocked(world)
     if metric == "anyangle":
+        MDTParams(fill)
+        if fill == "levels":
+            return K.descend_least_visible(blocked, field, sx, sy)
         return K.visibility_descend(blocked, field, sx, sy)
+    cut = DTParams(metric, corner_cutting).cuts_corners
     side, diag, scale = _weights(metric)
-    return K.descend(blocked, field * scale, sx, sy, side, diag)
+    return K.descend(blocked, field * scale, sx, sy, side, diag, cut)
 
 
-def plan(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = None,
-         seed: int | None = None) -> PlanResult:
-    """Plan with a distance transform (``seed`` is accepted for a uniform
-    interface; the transform is deterministic).
+def _no_seed_no_stop(name: str, seed: object, stop: object) -> None:
+    if seed is not None:
+        raise ParameterError(f"{name} is deterministic: seed must be None, got {seed!r}")
+    if stop is not None:
+        raise ParameterError(f"{name} is not iterative: stop must be None, got {stop!r}")
 
-    Returns a :class:`PlanResult` with the cell path; ``success=False`` with
-    the reason when the goal cannot be reached. ``info`` holds ``field_value``
-    (the transform's value at the start, in cells) and ``metric``.
 
-    Raises:
-        UnreachableError: start or goal outside the grid or blocked.
-    """
-    params = params or DTParams()
+def _field_plan(world: GridWorld, start: Any, goal: Any, name: str, metric: str,
+                info: dict[str, Any], **field_options: Any) -> PlanResult:
     start_xy = world.check_cell("start", start)
     goal_xy = world.check_cell("goal", goal)
-    name = {"chamfer34": "dt", "octile": "dt-octile", "anyangle": "mdt"}[params.metric]
     t0 = time.perf_counter()
-    field = distance_field(world, goal_xy, params.metric, max_free_cells=params.max_free_cells)
-    path = path_from_field(world, field, start_xy, params.metric)
+    field = distance_field(world, goal_xy, metric, **field_options)
+    options = {k: v for k, v in field_options.items() if k in ("corner_cutting", "fill")}
+    path = path_from_field(world, field, start_xy, metric, **options)
     runtime = time.perf_counter() - t0
     value = float(field[start_xy[1], start_xy[0]])
-    info = {"metric": params.metric, "field_value": value if math.isfinite(value) else None}
+    info = {"metric": metric, **info, "field_value": value if math.isfinite(value) else None}
     if path.shape[0] == 0:
         return PlanResult(np.zeros((0, 2)), False,
                           f"no path: goal {goal_xy} is not reachable from start {start_xy}",
-                          name, runtime, info=info)
-    return PlanResult(path.astype(float), True, "ok", name, runtime, info=info)
+                          name, runtime, info=info, outcome=Outcome.NO_PATH)
+    message = "ok: start is the goal" if start_xy == goal_xy else "ok"
+    return PlanResult(path.astype(float), True, message, name, runtime, info=info)
 
 
-def plan_mdt(world: GridWorld, start: Any, goal: Any, *, seed: int | None = None) -> PlanResult:
-    """The modified (any-angle) distance transform: ``plan`` with ``metric="anyangle"``."""
-    return plan(world, start, goal, params=DTParams("anyangle"), seed=seed)
+def plan(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = None,
+         seed: int | None = None, stop: Any = None) -> PlanResult:
+    """Plan with an 8-connected distance transform (default: the thesis' 3:4 chamfer).
 
+    Deterministic: ``seed`` and ``stop`` must be None. Returns a
+    :class:`PlanResult` with the cell path (``planner`` is ``"dt"`` for the
+    chamfer, ``"dt-octile"`` for the octile metric); ``success=False`` with
+    outcome ``no_path`` when the goal cannot be reached; start == goal gives
+    a one-cell path of length 0. ``info`` holds ``metric``,
+    ``corner_cutting`` and ``field_value`` (the value at the start, in cells).
+
+    Raises:
+        UnreachableError: start or goal outside the grid or blocked.
+        ParameterError: a seed or a stopping criterion was given.
+    """
+    params = params or DTParams()
+    name = "dt" if params.metric == "chamfer34" else "dt-octile"
+    _no_seed_no_stop(name, seed, stop)
+    cut = params.cuts_corners
+    return _field_plan(world, start, goal, name, params.metric, {"corner_cutting": cut},
+                       corner_cutting=cut)
+
+
+@register("grid", "dt", description="distance transform, 3:4 chamfer (thesis; corner cutting)")
+def plan_dt(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = None,
+            seed: int | None = None, stop: Any = None) -> PlanResult:
+    """The thesis' 3:4 distance transform: :func:`plan` with ``DTParams("chamfer34")``."""
+    params = params or DTParams("chamfer34")
+    if params.metric != "chamfer34":
+        raise ParameterError(f"planner dt takes DTParams(metric='chamfer34'), "
+                             f"got metric={params.metric!r} (use dt-octile)")
+    return plan(world, start, goal, params=params, seed=seed, stop=stop)
+
+
+@register("grid", "dt-octile",
+          description="distance transform, exact octile 1:sqrt2, no corner cutting (MovingAI)")
+def plan_octile(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = None,
+                seed: int | None = None, stop: Any = None) -> PlanResult:
+    """The exact 8-connected transform: :func:`plan` with ``DTParams("octile")``."""
+    params = params or DTParams("octile")
+    if params.metric != "octile":
+        raise ParameterError(f"planner dt-octile takes DTParams(metric='octile'), "
+                             f"got metric={params.metric!r} (use dt)")
+    return plan(world, start, goal, params=params, seed=seed, stop=stop)
+
+
+@register("grid", "mdt", description="modified (any-angle) distance transform, exact or levels")
+def plan_mdt(world: GridWorld, start: Any, goal: Any, *, params: MDTParams | None = None,
+             seed: int | None = None, stop: Any = None) -> PlanResult:
+    """The modified distance transform (see :class:`MDTParams`); deterministic.
+
+    ``info`` holds ``metric`` (``"anyangle"``), ``fill`` and ``field_value``
+    (the field at the start; for ``fill="exact"`` it equals the path length).
+
+    Raises:
+        UnreachableError: start or goal outside the grid or blocked.
+        ParameterError: a seed or stopping criterion, or a grid over ``max_free_cells``.
+    """
+    params = params or MDTParams()
+    _no_seed_no_stop("mdt", seed, stop)
+    return _field_plan(world, start, goal, "mdt", "anyangle", {"fill": params.fill},
+                       fill=params.fill, max_free_cells=params.max_free_cells)

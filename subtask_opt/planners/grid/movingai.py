@@ -19,7 +19,7 @@ import numpy as np
 from subtask_opt.base.errors import InputDataError, require_int
 from subtask_opt.planners.grid import _kernels as K
 from subtask_opt.planners.grid.distance_transform import _weights
-from subtask_opt.planners.grid.world import GridWorld
+from subtask_opt.planners.grid.world import MAX_SIDE, GridWorld, decode_text, read_file_bytes
 
 #: |ours - optimal| above this is a mismatch (scenario files print 5 decimals).
 MISMATCH_TOL = 1e-3
@@ -52,17 +52,18 @@ def read_scenarios(path: str | Path) -> Scenarios:
     """Read a MovingAI ``.scen`` file (version 1).
 
     Raises:
-        InputDataError: unreadable file, missing version line, or a malformed row
-            (naming the line).
+        InputDataError: unreadable or oversize file (over
+            :data:`~.world.MAX_FILE_BYTES`), missing version line, or a
+            malformed row (naming the line): wrong column count, a non-number,
+            a size over :data:`~.world.MAX_SIDE`, a cell outside its map size,
+            a negative or non-finite optimum.
     """
     path = Path(path)
-    try:
-        lines = path.read_text().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read scenario file {str(path)!r}: {exc}") from None
+    text = decode_text(read_file_bytes(path, "scenario"), str(path))
+    lines = text.splitlines()
     if not lines or lines[0].split()[:1] != ["version"]:
-        raise InputDataError(f"{path}: first line must be 'version 1', got "
-                             f"{lines[0] if lines else ''!r}")
+        first = lines[0][:40] if lines else ""
+        raise InputDataError(f"{path}: first line must be 'version 1', got {first!r}")
     ints: list[tuple[int, ...]] = []
     opt: list[float] = []
     map_name = ""
@@ -76,7 +77,16 @@ def read_scenarios(path: str | Path) -> Scenarios:
             row = tuple(int(p) for p in (parts[0], *parts[2:8]))
             value = float(parts[8])
         except ValueError:
-            raise InputDataError(f"{path}: line {n}: not a number in {line!r}") from None
+            raise InputDataError(f"{path}: line {n}: not a number in {line[:80]!r}") from None
+        bucket, width, height, sx, sy, gx, gy = row
+        if not 0 <= bucket < 2**31:
+            raise InputDataError(f"{path}: line {n}: bucket must be in [0, 2**31), got {bucket}")
+        if not (1 <= width <= MAX_SIDE and 1 <= height <= MAX_SIDE):
+            raise InputDataError(f"{path}: line {n}: map size {width}x{height} is not within "
+                                 f"1..{MAX_SIDE} cells a side")
+        if not (0 <= sx < width and 0 <= gx < width and 0 <= sy < height and 0 <= gy < height):
+            raise InputDataError(f"{path}: line {n}: start ({sx}, {sy}) or goal ({gx}, {gy}) "
+                                 f"is outside the {width}x{height} map")
         if not np.isfinite(value) or value < 0:
             raise InputDataError(f"{path}: line {n}: optimal length must be >= 0, got {value!r}")
         map_name = map_name or parts[1]

@@ -2,54 +2,72 @@
 
 Each step the cells of the active window (a certainty grid filled by a
 simulated sensor) vote into a polar histogram of ``n = 360 / alpha`` sectors
-with magnitude ``m = C^2 (a - b d)`` (eq. 2.7-2.10); the histogram is smoothed
-with weights 1..l+1..1 (eq. 2.11). Sectors below ``threshold`` form valleys;
-the robot steers at the target if its sector lies in a wide valley, else at
-the middle of the nearest valley (up to ``s_max`` sectors wide). Runs end as
-for :mod:`subtask_opt.planners.grid.vff`: goal, collision, stall or step limit.
+with magnitude ``m = C^2 (a - b d)`` (eq. 2.7-2.10), smoothed by eq. 2.11.
+Sectors below ``threshold`` form valleys; the robot steers at the target if
+its sector lies in a wide valley, else at the middle of the nearest valley (up
+to ``s_max`` sectors wide). Runs end as for :mod:`.vff` (see :mod:`._local`).
+
+Smoothing, eq. 2.11. The thesis prints
+``h'_k = (h_{k-l} + 2 h_{k-l+1} + ... + l h_k + ... + 2 h_{k+l-1} + h_{k+l}) / (2l + 1)``.
+The printed sequence 1, 2, ... climbs by one per sector, which puts ``l + 1``
+on the centre sector after ``l`` sectors, while the centre term is printed as
+``l h_k``. ``GridVFHParams.centre_weight`` picks the reading:
+``"printed"`` (default) weights the centre ``l`` as printed and every other
+sector as in the sequence (``l + 1 - |i|``); ``"sequence"`` weights the centre
+``l + 1`` (Borenstein & Koren's triangle 1..l+1..1). Both divide by ``2l + 1``
+as printed.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, require_int, require_positive
 from subtask_opt.base.results import PlanResult
+from subtask_opt.planners.base import register
 from subtask_opt.planners.grid import _kernels as K
-from subtask_opt.planners.grid.vff import RobotParams, _result
+from subtask_opt.planners.grid._local import GridRobotParams, check_deterministic, drive_result
 from subtask_opt.planners.grid.world import GridWorld
+
+__all__ = ["CENTRE_WEIGHTS", "GridVFHParams", "plan"]
+
+CENTRE_WEIGHTS = ("printed", "sequence")
 
 
 @dataclass(frozen=True)
-class VFHParams:
+class GridVFHParams:
     """VFH histogram and steering parameters (eq. 2.7-2.11) and the robot.
 
     Attributes:
-        alpha_deg: sector width alpha; ``360 / alpha_deg`` must be a whole number.
+        alpha_deg: sector width alpha; ``360 / alpha_deg`` must be a whole number >= 4.
         a, b: magnitude ``m = C^2 (a - b d)``; ``b = None`` picks
             ``a / (window * sqrt(2))`` so that ``m`` falls to 0 at the window corner.
         smoothing: ``l`` of eq. 2.11.
+        centre_weight: ``"printed"`` (centre weight ``l``, the thesis' print)
+            or ``"sequence"`` (``l + 1``); see the module docstring.
         threshold: smoothed density below which a sector is free.
         s_max: sectors of a wide valley.
-        robot: the simulated robot (:class:`RobotParams`; slower than VFF's by
-            default, 0.1 cell per step, which keeps VFH out of collisions in tight maps).
+        robot: the simulated robot (:class:`GridRobotParams`; slower than VFF's
+            by default, 0.1 cell per step, which keeps VFH out of collisions in
+            tight maps).
     """
 
     alpha_deg: float = 10.0
     a: float = 1.0
     b: float | None = None
     smoothing: int = 2
+    centre_weight: str = "printed"
     threshold: float = 10.0
     s_max: int = 8
-    robot: RobotParams = RobotParams(speed=0.1)
+    robot: GridRobotParams = field(default_factory=lambda: GridRobotParams(speed=0.1))
 
     def __post_init__(self) -> None:
-        o = "VFHParams"
+        o = "GridVFHParams"
         require_positive(o, "alpha_deg", self.alpha_deg)
         n = 360.0 / self.alpha_deg
         if abs(n - round(n)) > 1e-9 or round(n) < 4:
@@ -58,34 +76,46 @@ class VFHParams:
         require_positive(o, "a", self.a)
         if self.b is not None:
             require_positive(o, "b", self.b)
-        require_int(o, "smoothing", self.smoothing, 0)
+        require_int(o, "smoothing", self.smoothing, 0, 1000)
+        if self.centre_weight not in CENTRE_WEIGHTS:
+            raise ParameterError(f"{o}.centre_weight must be one of {CENTRE_WEIGHTS}, "
+                                 f"got {self.centre_weight!r}")
         require_positive(o, "threshold", self.threshold)
-        require_int(o, "s_max", self.s_max, 1)
+        require_int(o, "s_max", self.s_max, 1, 1000)
 
     @property
     def b_value(self) -> float:
         return self.b if self.b is not None else self.a / (self.robot.window * math.sqrt(2.0))
 
+    @property
+    def centre(self) -> float:
+        """The weight of the centre sector in eq. 2.11."""
+        extra = 1 if self.centre_weight == "sequence" else 0
+        return float(self.smoothing + extra) if self.smoothing > 0 else 1.0
 
-def plan(world: GridWorld, start: Any, goal: Any, *, params: VFHParams | None = None,
-         seed: int | None = None) -> PlanResult:
+    def kernel(self) -> K.VFHKernelParams:
+        return K.VFHKernelParams(math.radians(self.alpha_deg), float(self.a),
+                                 float(self.b_value), int(self.smoothing), self.centre,
+                                 float(self.threshold), int(self.s_max))
+
+
+@register("grid", "vfh", description="vector field histogram: a simulated robot, local, may stall")
+def plan(world: GridWorld, start: Any, goal: Any, *, params: GridVFHParams | None = None,
+         seed: int | None = None, stop: Any = None) -> PlanResult:
     """Drive from ``start`` to ``goal`` with the vector field histogram.
 
-    Deterministic (``seed`` is accepted for a uniform interface). See
-    :func:`subtask_opt.planners.grid.vff.plan` for the result.
+    Deterministic: ``seed`` and ``stop`` must be None. See
+    :func:`._local.drive_result` for the result.
 
     Raises:
         UnreachableError: start or goal outside the grid or blocked.
+        ParameterError: a seed or a stopping criterion was given.
     """
-    params = params or VFHParams()
-    r = params.robot
+    check_deterministic("vfh", seed, stop)
+    params = params or GridVFHParams()
     s = world.check_cell("start", start)
     g = world.check_cell("goal", goal)
-    p = np.array([r.window, math.radians(params.alpha_deg), params.a, params.b_value,
-                  params.smoothing, params.threshold, params.s_max,
-                  math.radians(r.max_turn_deg), r.speed, r.max_steps, r.goal_tolerance,
-                  r.stall_steps, r.stall_gain, r.certainty_increment, r.certainty_max])
     t0 = time.perf_counter()
     code, traj = K.vfh_run(world.occupancy.view(np.uint8), float(s[0]), float(s[1]),
-                           float(g[0]), float(g[1]), p)
-    return _result(world, int(code), traj, "vfh", time.perf_counter() - t0, g)
+                           float(g[0]), float(g[1]), params.robot.kernel(), params.kernel())
+    return drive_result(world, int(code), traj, "vfh", time.perf_counter() - t0, g)

@@ -6,7 +6,10 @@ with a cell size in world units. Coordinates follow the MovingAI convention:
 Every grid planner works in cell coordinates ``(x, y)``.
 
 Grids come from ASCII text (MovingAI characters), a numpy array, a PNG image
-(dark pixels blocked) or a MovingAI ``.map`` file.
+(dark pixels blocked) or a MovingAI ``.map`` file; :func:`read_grid` reads any
+of the three files, deciding the format by content. Files over
+:data:`MAX_FILE_BYTES` (64 MiB) or grids over :data:`MAX_SIDE` (4096) cells a
+side are refused with an :class:`InputDataError`, as is any malformed content.
 """
 
 from __future__ import annotations
@@ -149,66 +152,171 @@ class GridWorld:
         """
         if not isinstance(text, str):
             raise InputDataError(f"map text must be a string, got {type(text).__name__}")
-        lines = [ln.strip() for ln in text.strip().splitlines()]
-        return cls(_parse_rows(lines, "text", 1), cell_size, name)
+        return cls(_ascii_occupancy(text, "text"), cell_size, name)
 
     @classmethod
     def from_png(cls, path: str | Path, *, cell_size: float = 1.0, threshold: float = 0.5,
                  name: str = "") -> GridWorld:
-        """From an image: one pixel per cell; pixels darker than ``threshold``
-        (grey level in [0, 1]) are blocked; transparent pixels are free."""
-        from PIL import Image, UnidentifiedImageError
+        """From a PNG image: one pixel per cell; pixels darker than ``threshold``
+        (grey level in [0, 1]) are blocked; transparent pixels are free.
 
+        Raises:
+            InputDataError: unreadable, not a PNG, over :data:`MAX_FILE_BYTES`
+                or over :data:`MAX_SIDE` pixels a side.
+        """
         require_positive("from_png", "threshold", threshold)
         if threshold > 1:
             raise ParameterError(f"from_png.threshold must be in (0, 1], got {threshold!r}")
         path = Path(path)
-        try:
-            with Image.open(path) as img:
-                rgba = np.asarray(img.convert("RGBA"), dtype=float) / 255.0
-        except (OSError, UnidentifiedImageError) as exc:
-            raise InputDataError(f"cannot read image {str(path)!r}: {exc}") from None
-        grey = rgba[..., :3] @ np.array([0.299, 0.587, 0.114])
-        blocked = (grey < threshold) & (rgba[..., 3] >= 0.5)
-        return cls(blocked, cell_size, name or path.stem)
+        data = read_file_bytes(path, "image")
+        return cls(_png_occupancy(data, str(path), threshold), cell_size, name or path.stem)
 
     @classmethod
     def from_movingai(cls, path: str | Path, *, name: str | None = None) -> GridWorld:
-        """From a MovingAI ``.map`` file (``type octile``, ``height``, ``width``, ``map``)."""
+        """From a MovingAI ``.map`` file (``type octile``, ``height``, ``width``, ``map``).
+
+        Raises:
+            InputDataError: unreadable, malformed (naming the line), over
+                :data:`MAX_FILE_BYTES` or :data:`MAX_SIDE` cells a side.
+        """
         path = Path(path)
-        try:
-            text = path.read_text()
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputDataError(f"cannot read map {str(path)!r}: {exc}") from None
-        lines = text.splitlines()
-        header: dict[str, str] = {}
-        i = 0
-        while i < len(lines) and lines[i].strip().lower() != "map":
-            parts = lines[i].split()
-            if len(parts) == 2:
-                header[parts[0].lower()] = parts[1]
-            elif parts:
-                raise InputDataError(f"{path}: line {i + 1}: bad header line {lines[i]!r}")
-            i += 1
-        if i == len(lines):
-            raise InputDataError(f"{path}: no 'map' line found")
-        try:
-            height, width = int(header["height"]), int(header["width"])
-        except (KeyError, ValueError):
-            raise InputDataError(
-                f"{path}: header must give integer 'height' and 'width', got {header}") from None
-        if height < 1 or width < 1:
-            raise InputDataError(f"{path}: height and width must be >= 1, got {height}x{width}")
-        rows = [ln.rstrip("\r\n") for ln in lines[i + 1:]]
-        while rows and not rows[-1].strip():
-            rows.pop()
-        if len(rows) != height:
-            raise InputDataError(f"{path}: header says height {height}, found {len(rows)} rows")
-        occ = _parse_rows(rows, str(path), i + 2)
-        if occ.shape[1] != width:
-            raise InputDataError(
-                f"{path}: header says width {width}, rows have {occ.shape[1]} characters")
-        return cls(occ, 1.0, path.stem if name is None else name)
+        text = decode_text(read_file_bytes(path, "map"), str(path))
+        return cls(_movingai_occupancy(text, str(path)), 1.0, path.stem if name is None else name)
+
+
+MAX_FILE_BYTES = 64 * 2**20
+"""Map, image and scenario files larger than this (64 MiB) are refused."""
+MAX_SIDE = 4096
+"""Grids wider or taller than this many cells are refused when read from a file."""
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def read_grid(path: str | Path, *, name: str | None = None) -> GridWorld:
+    """Read a grid file, deciding its format by content, never by suffix.
+
+    * bytes starting with the PNG signature -> :meth:`GridWorld.from_png`;
+    * text whose first non-blank line starts with a MovingAI header key
+      (``type``, ``height``, ``width``) -> :meth:`GridWorld.from_movingai`;
+    * any other text -> :meth:`GridWorld.from_ascii` (one row a line).
+
+    Raises:
+        InputDataError: unreadable, binary but not PNG, over the size limits
+            (:data:`MAX_FILE_BYTES`, :data:`MAX_SIDE`), or malformed, naming
+            the problem.
+    """
+    path = Path(path)
+    data = read_file_bytes(path, "map")
+    label = path.stem if name is None else name
+    if data.startswith(PNG_SIGNATURE):
+        return GridWorld(_png_occupancy(data, str(path), 0.5), 1.0, label)
+    text = decode_text(data, str(path))
+    first = next((ln.split() for ln in text.splitlines() if ln.strip()), [""])
+    if first[0].lower() in ("type", "height", "width"):
+        return GridWorld(_movingai_occupancy(text, str(path)), 1.0, label)
+    return GridWorld(_ascii_occupancy(text, str(path)), 1.0, label)
+
+
+def check_small_grid(world: GridWorld, max_free_cells: int, why: str) -> None:
+    """Raise :class:`ParameterError` when ``world`` has more than ``max_free_cells``
+    free cells (planners that test pairs of cells refuse big grids)."""
+    n_free = int(np.count_nonzero(~world.occupancy))
+    if n_free > max_free_cells:
+        raise ParameterError(f"{why}; this grid has {n_free} free cells, more than "
+                             f"max_free_cells={max_free_cells}")
+
+
+def read_file_bytes(path: Path, what: str) -> bytes:
+    try:
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise InputDataError(f"{what} file {str(path)!r} has {size} bytes, more than the "
+                                 f"limit of {MAX_FILE_BYTES} ({MAX_FILE_BYTES / 2**20:g} MiB)")
+        with path.open("rb") as fh:
+            return fh.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise InputDataError(f"cannot read {what} {str(path)!r}: "
+                             f"{exc.strerror or exc}") from None
+
+
+def decode_text(data: bytes, source: str) -> str:
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputDataError(f"{source}: not a text file (byte {exc.start} is not UTF-8) "
+                             f"and not a PNG image") from None
+
+
+def _check_side(source: str, height: int, width: int) -> None:
+    if height > MAX_SIDE or width > MAX_SIDE:
+        raise InputDataError(f"{source}: a {width}x{height} grid is over the limit of "
+                             f"{MAX_SIDE}x{MAX_SIDE} cells")
+
+
+def _png_occupancy(data: bytes, source: str, threshold: float) -> np.ndarray:
+    """PNG bytes -> bool array (dark, opaque pixels blocked)."""
+    import io
+
+    from PIL import Image
+
+    if not data.startswith(PNG_SIGNATURE):
+        raise InputDataError(f"cannot read image {source!r}: not a PNG file")
+    try:
+        with Image.open(io.BytesIO(data), formats=["PNG"]) as img:
+            width, height = img.size
+            _check_side(source, height, width)
+            rgba = np.asarray(img.convert("RGBA"), dtype=float) / 255.0
+    except InputDataError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a decoder fails in many ways on bad bytes
+        raise InputDataError(f"cannot read image {source!r}: {type(exc).__name__}: "
+                             f"{str(exc)[:120]}") from None
+    if rgba.ndim != 3 or rgba.shape[0] < 1 or rgba.shape[1] < 1:
+        raise InputDataError(f"cannot read image {source!r}: empty image")
+    grey = rgba[..., :3] @ np.array([0.299, 0.587, 0.114])
+    return (grey < threshold) & (rgba[..., 3] >= 0.5)
+
+
+def _ascii_occupancy(text: str, source: str) -> np.ndarray:
+    lines = [ln.strip() for ln in text.strip().splitlines()]
+    if len(lines) > MAX_SIDE or (lines and max(len(ln) for ln in lines) > MAX_SIDE):
+        raise InputDataError(f"{source}: more than {MAX_SIDE} rows or columns "
+                             f"(limit {MAX_SIDE}x{MAX_SIDE} cells)")
+    return _parse_rows(lines, source, 1)
+
+
+def _movingai_occupancy(text: str, source: str) -> np.ndarray:
+    """The body of a MovingAI ``.map`` file -> bool array."""
+    lines = text.splitlines()
+    header: dict[str, str] = {}
+    i = 0
+    while i < len(lines) and lines[i].strip().lower() != "map":
+        parts = lines[i].split()
+        if len(parts) == 2:
+            header[parts[0].lower()] = parts[1]
+        elif parts:
+            raise InputDataError(f"{source}: line {i + 1}: bad header line {lines[i][:80]!r}")
+        i += 1
+    if i == len(lines):
+        raise InputDataError(f"{source}: no 'map' line found")
+    try:
+        height, width = int(header["height"]), int(header["width"])
+    except (KeyError, ValueError):
+        shown = {k: v[:20] for k, v in list(header.items())[:4]}
+        raise InputDataError(
+            f"{source}: header must give integer 'height' and 'width', got {shown}") from None
+    if height < 1 or width < 1:
+        raise InputDataError(f"{source}: height and width must be >= 1, got {height}x{width}")
+    _check_side(source, height, width)
+    rows = [ln.rstrip("\r\n") for ln in lines[i + 1:]]
+    while rows and not rows[-1].strip():
+        rows.pop()
+    if len(rows) != height:
+        raise InputDataError(f"{source}: header says height {height}, found {len(rows)} rows")
+    occ = _parse_rows(rows, source, i + 2)
+    if occ.shape[1] != width:
+        raise InputDataError(
+            f"{source}: header says width {width}, rows have {occ.shape[1]} characters")
+    return occ
 
 
 def _parse_rows(rows: list[str], source: str, first_line: int) -> np.ndarray:
@@ -221,7 +329,7 @@ def _parse_rows(rows: list[str], source: str, first_line: int) -> np.ndarray:
             raise InputDataError(
                 f"{source}: row {r} (line {first_line + r}) has {len(row)} characters, "
                 f"expected {width}")
-    arr = np.array([list(row) for row in rows])
+    arr = np.array(rows, dtype=f"<U{width}").view("<U1").reshape(len(rows), width)
     known = np.isin(arr, list(FREE_CHARS | BLOCKED_CHARS))
     if not known.all():
         r, c = np.argwhere(~known)[0]

@@ -15,9 +15,21 @@ so shortest paths that wrap around vertices are free.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+
+
+class PSOConfig(NamedTuple):
+    """Kernel parameters of :func:`pso_run` (built by ``PSOParams.kernel_config``)."""
+
+    w_start: float
+    w_end: float
+    c1: float
+    c2: float
+    v_max: float
+    inertia_iterations: float
 
 # Results of segment_contact.
 CONTACT_NONE, CONTACT_TOUCH, CONTACT_CROSS = 0, 1, 2
@@ -417,13 +429,18 @@ def pso_run(x, v, pbest, pbest_cost, gbest, gbest_cost, counters, links, start, 
             cfg, rng, n_gens, stall_limit, target, hist_best, hist_mean):
     """Run up to ``n_gens`` inertia-weight PSO iterations in place; return how many ran.
 
-    Each particle is one parameter in [0, 1] per crossed link. ``cfg`` holds
-    (w_start, w_end, c1, c2, v_max, inertia_horizon); the inertia weight falls
-    linearly from w_start to w_end over inertia_horizon iterations (Shi &
-    Eberhart). ``counters`` = (iteration, iteration of last improvement).
+    Each particle is one parameter in [0, 1] per crossed link. ``cfg`` is a
+    :class:`PSOConfig`; the inertia weight falls linearly from w_start to
+    w_end over inertia_iterations iterations (Shi & Eberhart). ``counters`` =
+    (iteration, iteration of last improvement).
     """
     n_part, dim = x.shape
-    w_start, w_end, c1, c2, v_max, horizon = cfg[0], cfg[1], cfg[2], cfg[3], cfg[4], cfg[5]
+    w_start = cfg.w_start
+    w_end = cfg.w_end
+    c1 = cfg.c1
+    c2 = cfg.c2
+    v_max = cfg.v_max
+    horizon = cfg.inertia_iterations
     ran = 0
     for step in range(n_gens):
         if gbest_cost[0] <= target or counters[0] - counters[1] >= stall_limit:

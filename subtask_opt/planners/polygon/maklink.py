@@ -41,9 +41,16 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.base.results import PlanResult
+from subtask_opt.base.errors import InputDataError
+from subtask_opt.base.results import Outcome, PlanResult
+from subtask_opt.planners.base import register
 from subtask_opt.planners.polygon import _kernels as gk
+from subtask_opt.planners.polygon._routes import (
+    check_deterministic,
+    same_point,
+    shortest_route,
+    world_cache,
+)
 from subtask_opt.planners.polygon.world import PolygonWorld
 
 
@@ -118,20 +125,19 @@ class MaklinkGraph:
                 w[ids, row] = d
         if set(start_cells) & set(goal_cells):
             w[n, n + 1] = w[n + 1, n] = float(np.hypot(*(goal - start)))
-        length, prev = gk.dijkstra_dense(w, n, n + 1)
-        if not math.isfinite(length):
-            return math.inf, []
-        nodes = [n + 1]
-        while nodes[-1] != n:
-            nodes.append(int(prev[nodes[-1]]))
-        return float(length), nodes[-2:0:-1]
+        length, nodes = shortest_route(w, n, n + 1)
+        return length, nodes[1:-1]
 
 
 # -- construction ---------------------------------------------------------------------
 
 
 def build_graph(world: PolygonWorld) -> MaklinkGraph:
-    """Build the MAKLINK graph of ``world`` (computed, not cached; see :func:`graph_for`)."""
+    """Build the MAKLINK graph of ``world`` (computed, not cached; see :func:`graph_for`).
+
+    Time and memory grow with the square of the vertex count (the candidate
+    links); the world refuses more vertices than fit in the memory limit.
+    """
     verts, offsets, boxes, bounds, eps = world.kernel_arrays()
     x0, y0, x1, y1 = world.bounds
     nv = len(verts)
@@ -181,22 +187,22 @@ def build_graph(world: PolygonWorld) -> MaklinkGraph:
     return _assemble(world, points, links, neighbours, set(obstacle_edges), eps)
 
 
+@world_cache
 def graph_for(world: PolygonWorld) -> MaklinkGraph:
-    """:func:`build_graph`, cached on the (immutable) world."""
-    graph = world._cache.get("maklink")
-    if graph is None:
-        graph = build_graph(world)
-        world._cache["maklink"] = graph
-    return graph
+    """:func:`build_graph`, cached per world (a small LRU in this module)."""
+    return build_graph(world)
 
 
 def _unique_points(pts: np.ndarray, keep_first: int, eps: float) -> np.ndarray:
-    """Drop points within eps of an earlier one (the first ``keep_first`` are distinct)."""
-    diff = pts[:, None, :] - pts[None, :, :]
-    close = np.hypot(diff[..., 0], diff[..., 1]) <= eps
+    """Drop points within eps of an earlier kept one (the first ``keep_first`` are distinct).
+
+    One row at a time (linear memory): the dense pairwise table would be the
+    largest array of the whole construction.
+    """
     keep = np.ones(len(pts), dtype=bool)
     for i in range(keep_first, len(pts)):
-        if np.any(close[i, :i] & keep[:i]):
+        d = np.hypot(pts[:i, 0] - pts[i, 0], pts[:i, 1] - pts[i, 1])
+        if np.any((d <= eps) & keep[:i]):
             keep[i] = False
     return np.ascontiguousarray(pts[keep])
 
@@ -317,9 +323,9 @@ def _assemble(world: PolygonWorld, points: np.ndarray, links: np.ndarray,
     cell_verts = np.ascontiguousarray(np.concatenate(cells) if cells else np.zeros((0, 2)))
     mids = 0.5 * (points[links[:, 0]] + points[links[:, 1]]) if len(links) else np.zeros((0, 2))
     w = np.full((len(links), len(links)), np.inf)
-    for ids in cell_links:
-        for i in ids:
-            for j in ids:
+    for members in cell_links:
+        for i in members:
+            for j in members:
                 if i != j:
                     w[i, j] = math.hypot(*(mids[i] - mids[j]))
     return MaklinkGraph(world=world, points=points, link_ends=links.reshape(-1, 2),
@@ -482,50 +488,64 @@ def points_on_links(graph: MaklinkGraph, ids: np.ndarray, t: np.ndarray) -> np.n
     return links[:, :2] + t[:, None] * (links[:, 2:] - links[:, :2])
 
 
-@dataclass(frozen=True)
-class MaklinkParams:
-    """Options of the MAKLINK planner.
+@register("polygon", "dijkstra",
+          description="Dijkstra over the MAKLINK free-link graph (link midpoints)")
+def dijkstra(world: PolygonWorld, start: Any, goal: Any, *, params: Any = None,
+             seed: int | None = None, stop: Any = None) -> PlanResult:
+    """Dijkstra's shortest route over the MAKLINK graph (the paper's Fig. 3).
 
-    Attributes:
-        improve: shorten the Dijkstra route by the triangle inequality
-            ("improved Dijkstra"); False gives the plain Dijkstra route.
-    """
-
-    improve: bool = False
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.improve, bool):
-            raise ParameterError(f"MaklinkParams.improve must be True or False, "
-                                 f"got {self.improve!r}")
-
-
-def plan(world: PolygonWorld, start: Any, goal: Any, *, params: MaklinkParams | None = None,
-         seed: int | None = None) -> PlanResult:
-    """Dijkstra (or improved Dijkstra) route over the MAKLINK graph of ``world``.
-
-    ``seed`` is accepted for the common planner signature; the planner is
-    deterministic. ``info`` holds ``links`` (crossed link ids), ``graph_links``,
-    ``graph_cells`` and, for the improved route, ``dijkstra_length``.
+    The path runs from start through the midpoints of the crossed free links
+    to goal. Deterministic: ``params``, ``seed`` and ``stop`` must be None.
+    ``info`` holds ``links`` (crossed link ids), ``graph_links`` and ``graph_cells``.
 
     Raises:
+        ParameterError: params, seed or stop given.
         InputDataError, UnreachableError: start or goal malformed, outside the
-            bounds or inside an obstacle.
+            bounds, inside an obstacle or on its boundary.
     """
-    params = params or MaklinkParams()
+    check_deterministic("dijkstra", params, None, seed, stop)
+    return _plan(world, start, goal, improve=False)
+
+
+@register("polygon", "improved",
+          description="improved Dijkstra: the MAKLINK route shortened by the triangle "
+                      "inequality")
+def improved_dijkstra(world: PolygonWorld, start: Any, goal: Any, *, params: Any = None,
+                      seed: int | None = None, stop: Any = None) -> PlanResult:
+    """The Dijkstra route shortened by the triangle inequality (:func:`shortcut`).
+
+    Deterministic: ``params``, ``seed`` and ``stop`` must be None. ``info``
+    holds ``links``, ``graph_links``, ``graph_cells`` and ``dijkstra_length``.
+
+    Raises:
+        ParameterError: params, seed or stop given.
+        InputDataError, UnreachableError: start or goal malformed, outside the
+            bounds, inside an obstacle or on its boundary.
+    """
+    check_deterministic("improved", params, None, seed, stop)
+    return _plan(world, start, goal, improve=True)
+
+
+def _plan(world: PolygonWorld, start: Any, goal: Any, *, improve: bool) -> PlanResult:
     t0 = time.perf_counter()
     s = world.check_point("start", start)
     g = world.check_point("goal", goal)
+    name = "improved" if improve else "dijkstra"
+    if same_point(world.eps, s, g):
+        return PlanResult(path=np.array([s, g]), success=True, planner=name,
+                          message="ok (start equals goal)", runtime_s=time.perf_counter() - t0,
+                          info={"links": [], **({"dijkstra_length": 0.0} if improve else {})})
     graph = graph_for(world)
-    name = "improved_dijkstra" if params.improve else "dijkstra"
     length, ids = graph.route(s, g)
     info: dict[str, Any] = {"graph_links": graph.n_links, "graph_cells": len(graph.cells)}
     if not math.isfinite(length):
         return PlanResult(path=np.zeros((0, 2)), success=False, planner=name,
+                          outcome=Outcome.NO_PATH,
                           message="no collision-free path: start and goal are separated by "
                                   "obstacles", runtime_s=time.perf_counter() - t0, info=info)
     path = np.vstack([s, graph.midpoints[ids].reshape(-1, 2), g])
     info["links"] = [int(k) for k in ids]
-    if params.improve:
+    if improve:
         info["dijkstra_length"] = length
         path = shortcut(world, path)
     return PlanResult(path=path, success=True, message="ok", planner=name,

@@ -8,7 +8,8 @@ parameter vector is a collision-free path, and the PSO (Shi & Eberhart 1999,
 weight falling linearly) searches that box for the shortest one. The swarm
 starts with the improved path itself, so the result is never longer.
 
-The loop runs in numba (:func:`._geometry_kernels.pso_run`) in chunks of
+The loop runs in numba (:func:`._kernels.pso_run`, its parameters in a
+:class:`._kernels.PSOConfig` named tuple) in chunks of
 iterations between which the stopping criteria of :mod:`subtask_opt.base.stop` are
 asked, as in the GA core: iteration-based criteria stop at the same iteration
 however the run is chunked, so a seed reproduces its result.
@@ -25,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, require_in_range, require_int, require_positive
-from subtask_opt.base.results import History, PlanResult
+from subtask_opt.base.geometry import polyline_length
+from subtask_opt.base.results import History, Outcome, PlanResult
 from subtask_opt.base.stop import (
     MaxGenerations,
     NoImprovement,
@@ -35,8 +37,10 @@ from subtask_opt.base.stop import (
     kernel_limits,
 )
 from subtask_opt.ga.loop import run_in_chunks
+from subtask_opt.planners.base import check_seed, register
 from subtask_opt.planners.polygon import _kernels as gk
 from subtask_opt.planners.polygon import maklink
+from subtask_opt.planners.polygon._routes import same_point
 from subtask_opt.planners.polygon.world import PolygonWorld
 
 
@@ -76,9 +80,11 @@ class PSOParams:
             raise ParameterError(f"PSOParams.v_max must be in (0, 1], got {self.v_max!r}")
         require_int("PSOParams", "inertia_iterations", self.inertia_iterations, 1)
 
-    def as_array(self) -> np.ndarray:
-        return np.array([self.w_start, self.w_end, self.c1, self.c2, self.v_max,
-                         float(self.inertia_iterations)])
+    def kernel_config(self) -> gk.PSOConfig:
+        """The kernel's view of these settings (a NamedTuple numba can cache)."""
+        return gk.PSOConfig(w_start=float(self.w_start), w_end=float(self.w_end),
+                            c1=float(self.c1), c2=float(self.c2), v_max=float(self.v_max),
+                            inertia_iterations=float(self.inertia_iterations))
 
 
 def default_stop() -> list[StoppingCriterion]:
@@ -105,9 +111,9 @@ def optimize_crossings(links: np.ndarray, start: np.ndarray, goal: np.ndarray,
 
     ``initial`` (one t per link) is particle 0; the others start uniformly at random.
     """
-    params = params or PSOParams()
+    params = _check_params(params)
     criteria = as_criteria(stop, default_stop())
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_seed(seed, owner="optimize_crossings seed"))
     links = np.ascontiguousarray(links, dtype=float).reshape(-1, 4)
     dim = len(links)
     x = rng.random((params.swarm, dim))
@@ -119,7 +125,7 @@ def optimize_crossings(links: np.ndarray, start: np.ndarray, goal: np.ndarray,
     gbest = pbest[i0].copy()
     gbest_cost = np.array([pbest_cost[i0]])
     counters = np.zeros(2, dtype=np.int64)
-    cfg = params.as_array()
+    cfg = params.kernel_config()
     stall_limit, target = kernel_limits(criteria)
 
     t0 = time.perf_counter()
@@ -149,6 +155,16 @@ def _progress(counters: np.ndarray, best: np.ndarray, t0: float) -> Progress:
                     runtime_s=time.perf_counter() - t0)
 
 
+def _check_params(params: object) -> PSOParams:
+    if params is None:
+        return PSOParams()
+    if not isinstance(params, PSOParams):
+        raise ParameterError(f"pso params must be None or a PSOParams, got {params!r}")
+    return params
+
+
+@register("polygon", "pso", description="improved Dijkstra + inertia-weight PSO sliding the "
+          "crossings along their links (seed paper 003)", stochastic=True, iterative=True)
 def plan(world: PolygonWorld, start: Any, goal: Any, *, params: PSOParams | None = None,
          seed: int | None = None,
          stop: StoppingCriterion | list[StoppingCriterion] | None = None,
@@ -159,7 +175,7 @@ def plan(world: PolygonWorld, start: Any, goal: Any, *, params: PSOParams | None
         world: the polygon world (its MAKLINK graph is built once and cached).
         start, goal: free points.
         params: PSO settings.
-        seed: random seed; ``None`` draws one, reported in ``info["seed"]``.
+        seed: random seed in [0, 2**63); ``None`` draws one, reported in ``info["seed"]``.
         stop: stopping criteria (default: 200 iterations or 50 without improvement).
         on_chunk: called with a :class:`~subtask_opt.base.stop.Progress` between chunks.
 
@@ -171,22 +187,29 @@ def plan(world: PolygonWorld, start: Any, goal: Any, *, params: PSOParams | None
 
     Raises:
         InputDataError, UnreachableError: start or goal malformed, outside the
-            bounds or inside an obstacle.
-        ParameterError: bad ``params`` or ``stop``.
+            bounds, inside an obstacle or on its boundary.
+        ParameterError: bad ``params``, ``seed`` or ``stop``.
     """
-    params = params or PSOParams()
+    params = _check_params(params)
     criteria = as_criteria(stop, default_stop())
+    seed = check_seed(seed, owner="pso seed")
     if seed is None:
-        seed = int(np.random.SeedSequence().entropy % (1 << 63))
-    require_int("pso.plan", "seed", seed, 0)
+        seed = int(np.random.SeedSequence().entropy % (1 << 63))  # type: ignore[operator]
     t0 = time.perf_counter()
     s = world.check_point("start", start)
     g = world.check_point("goal", goal)
+    info: dict[str, Any] = {"seed": seed}
+    if same_point(world.eps, s, g):
+        info.update(dijkstra_length=0.0, improved_length=0.0, links=[], t=[], iterations=0)
+        return PlanResult(path=np.array([s, g]), success=True, message="ok (start equals goal)",
+                          planner="pso", runtime_s=time.perf_counter() - t0,
+                          history=History(0.0, np.zeros(0), np.zeros(0)), info=info)
     graph = maklink.graph_for(world)
     d_length, route = graph.route(s, g)
-    info: dict[str, Any] = {"seed": seed, "graph_links": graph.n_links}
+    info["graph_links"] = graph.n_links
     if not math.isfinite(d_length):
         return PlanResult(path=np.zeros((0, 2)), success=False, planner="pso",
+                          outcome=Outcome.NO_PATH,
                           message="no collision-free path: start and goal are separated by "
                                   "obstacles", runtime_s=time.perf_counter() - t0, info=info)
     improved = maklink.shortcut(world, np.vstack([s, graph.midpoints[route].reshape(-1, 2), g]))
@@ -196,9 +219,10 @@ def plan(world: PolygonWorld, start: Any, goal: Any, *, params: PSOParams | None
     except RuntimeError:  # numerically ambiguous crossings: start from the Dijkstra route
         ids, t_init = np.asarray(route, dtype=np.int64), np.full(len(route), 0.5)
         message = "ok (PSO started from the Dijkstra route)"
+    improved_length = polyline_length(improved)
     if len(ids) == 0:  # start and goal share a cell: the straight line is optimal
-        outcome = SwarmOutcome(t=np.zeros(0), cost=_length(improved), iterations=0,
-                               history=History(_length(improved), np.zeros(0), np.zeros(0)),
+        outcome = SwarmOutcome(t=np.zeros(0), cost=improved_length, iterations=0,
+                               history=History(improved_length, np.zeros(0), np.zeros(0)),
                                runtime_s=0.0)
     else:
         outcome = optimize_crossings(graph.links[ids], s, g, t_init, params=params, seed=seed,
@@ -206,15 +230,11 @@ def plan(world: PolygonWorld, start: Any, goal: Any, *, params: PSOParams | None
     path = _straighten(world, np.vstack([s, maklink.points_on_links(graph, ids, outcome.t), g]))
     if not world.path_free(path):  # cannot happen with convex cells; guard numerical corner cases
         path, message = improved, "ok (PSO path rejected by the collision check; improved path)"
-    info.update(dijkstra_length=d_length, improved_length=_length(improved),
+    info.update(dijkstra_length=d_length, improved_length=improved_length,
                 links=[int(k) for k in ids], t=outcome.t.tolist(),
                 iterations=outcome.iterations)
     return PlanResult(path=path, success=True, message=message, planner="pso",
                       runtime_s=time.perf_counter() - t0, history=outcome.history, info=info)
-
-
-def _length(path: np.ndarray) -> float:
-    return float(np.sum(np.hypot(*np.diff(path, axis=0).T)))
 
 
 def _straighten(world: PolygonWorld, path: np.ndarray) -> np.ndarray:
@@ -224,7 +244,7 @@ def _straighten(world: PolygonWorld, path: np.ndarray) -> np.ndarray:
     arbitrary precision; dropping them changes the length by < 1e-9 relative
     and leaves only the real corners.
     """
-    tol = 1e-9 * max(_length(path), world.eps)
+    tol = 1e-9 * max(polyline_length(path), world.eps)
     out = [path[0]]
     for i in range(1, len(path) - 1):
         a, b, c = out[-1], path[i], path[i + 1]

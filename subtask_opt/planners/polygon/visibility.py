@@ -7,9 +7,15 @@ path over the graph of mutually visible convex vertices, plus start and goal,
 is the true optimum; :mod:`.maklink` and :mod:`.pso` can only approach it
 from above.
 
-The vertex-to-vertex part of the graph depends on the world alone and is
-cached on it, so :func:`shortest_path_length` (called many times by the
-reactive-navigation benchmark) only tests the ~2n segments from start and goal.
+Vertices where an obstacle touches the outer boundary are left out: the
+free angle there is below 180 deg on both sides, so no shortest path bends at
+them, and a path bending there would slip through the zero-width gap between
+obstacle and wall (the other planners see that gap as closed too).
+
+The vertex-to-vertex part of the graph depends on the world alone and is kept
+in a small per-world cache in this module, so :func:`shortest_path_length`
+(called many times by the reactive-navigation benchmark) only tests the ~2n
+segments from start and goal.
 """
 
 from __future__ import annotations
@@ -22,8 +28,15 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError
-from subtask_opt.base.results import PlanResult
+from subtask_opt.base.results import Outcome, PlanResult
+from subtask_opt.planners.base import register
 from subtask_opt.planners.polygon import _kernels as gk
+from subtask_opt.planners.polygon._routes import (
+    check_deterministic,
+    same_point,
+    shortest_route,
+    world_cache,
+)
 from subtask_opt.planners.polygon.world import PolygonWorld
 
 
@@ -34,7 +47,8 @@ class VisibilityParams:
     Attributes:
         convex_only: use only convex obstacle vertices as graph nodes (a
             shortest path never bends at a reflex vertex, so the answer is the
-            same and the graph smaller). False keeps every vertex.
+            same and the graph smaller). False keeps every vertex (except
+            those touching the outer boundary, which are never usable).
     """
 
     convex_only: bool = True
@@ -78,8 +92,10 @@ def convex_vertex_mask(world: PolygonWorld) -> np.ndarray:
 def build_graph(world: PolygonWorld, params: VisibilityParams | None = None) -> VisibilityGraph:
     """The vertex-to-vertex visibility graph of ``world`` (computed, not cached)."""
     params = params or VisibilityParams()
-    idx = (np.flatnonzero(convex_vertex_mask(world)) if params.convex_only
-           else np.arange(len(world.vertices)))
+    usable = ~world.on_bounds
+    if params.convex_only:
+        usable &= convex_vertex_mask(world)
+    idx = np.flatnonzero(usable)
     pts = np.ascontiguousarray(world.vertices[idx])
     verts, offsets, boxes, bounds, eps = world.kernel_arrays()
     vis = gk.visibility_matrix(pts, verts, offsets, boxes, bounds, eps)
@@ -89,19 +105,20 @@ def build_graph(world: PolygonWorld, params: VisibilityParams | None = None) -> 
 
 
 def graph_for(world: PolygonWorld, params: VisibilityParams | None = None) -> VisibilityGraph:
-    """:func:`build_graph`, cached on the (immutable) world."""
-    params = params or VisibilityParams()
-    key = ("visibility", params.convex_only)
-    graph = world._cache.get(key)
-    if graph is None:
-        graph = build_graph(world, params)
-        world._cache[key] = graph
-    return graph
+    """:func:`build_graph`, cached per world and params (a small LRU in this module)."""
+    return _cached_graph(world, params or VisibilityParams())
+
+
+@world_cache
+def _cached_graph(world: PolygonWorld, params: VisibilityParams) -> VisibilityGraph:
+    return build_graph(world, params)
 
 
 def _solve(world: PolygonWorld, graph: VisibilityGraph, start: np.ndarray,
            goal: np.ndarray) -> tuple[float, list[int]]:
     """Length and node sequence (indices into graph.points, -1 start, -2 goal)."""
+    if same_point(world.eps, start, goal):
+        return 0.0, [-1, -2]
     if world.segment_free(start, goal):
         return float(math.hypot(*(goal - start))), [-1, -2]
     m = len(graph.points)
@@ -113,14 +130,10 @@ def _solve(world: PolygonWorld, graph: VisibilityGraph, start: np.ndarray,
         d = np.where(vis, np.hypot(*(graph.points - p).T), np.inf)
         w[row, :m] = d
         w[:m, row] = d
-    length, prev = gk.dijkstra_dense(w, m, m + 1)
-    if not math.isfinite(length):
+    length, nodes = shortest_route(w, m, m + 1)
+    if not nodes:
         return math.inf, []
-    nodes = [m + 1]
-    while nodes[-1] != m:
-        nodes.append(int(prev[nodes[-1]]))
-    nodes.reverse()
-    return float(length), [-1] + nodes[1:-1] + [-2]
+    return length, [-1] + nodes[1:-1] + [-2]
 
 
 def shortest_path_length(world: PolygonWorld, start: Any, goal: Any) -> float:
@@ -135,18 +148,23 @@ def shortest_path_length(world: PolygonWorld, start: Any, goal: Any) -> float:
     return _solve(world, graph_for(world), s, g)[0]
 
 
+@register("polygon", "visibility",
+          description="exact shortest path over the visibility graph of the obstacle vertices")
 def plan(world: PolygonWorld, start: Any, goal: Any, *, params: VisibilityParams | None = None,
-         seed: int | None = None) -> PlanResult:
+         seed: int | None = None, stop: Any = None) -> PlanResult:
     """Exact shortest path from ``start`` to ``goal`` over the visibility graph.
 
-    ``seed`` is accepted for the common planner signature; the planner is
-    deterministic. ``info`` holds ``graph_nodes``, ``graph_edges`` and
-    ``vertices`` (rows of ``world.vertices`` the path bends at).
+    Deterministic: ``seed`` and ``stop`` must be None. ``info`` holds
+    ``graph_nodes``, ``graph_edges`` and ``vertices`` (rows of
+    ``world.vertices`` the path bends at).
 
     Raises:
+        ParameterError: a seed or stopping criteria given, or params not a
+            :class:`VisibilityParams`.
         InputDataError, UnreachableError: start or goal malformed, outside the
             bounds or inside an obstacle.
     """
+    check_deterministic("visibility", params, VisibilityParams, seed, stop)
     params = params or VisibilityParams()
     t0 = time.perf_counter()
     s = world.check_point("start", start)
@@ -154,13 +172,15 @@ def plan(world: PolygonWorld, start: Any, goal: Any, *, params: VisibilityParams
     graph = graph_for(world, params)
     length, nodes = _solve(world, graph, s, g)
     runtime = time.perf_counter() - t0
-    info = {"graph_nodes": len(graph.points) + 2, "graph_edges": graph.n_edges}
+    info: dict[str, Any] = {"graph_nodes": len(graph.points) + 2,
+                            "graph_edges": graph.n_edges}
     if not nodes:
         return PlanResult(path=np.zeros((0, 2)), success=False, planner="visibility",
+                          outcome=Outcome.NO_PATH,
                           message="no collision-free path: start and goal are separated by "
                                   "obstacles", runtime_s=runtime, info=info)
     inner = nodes[1:-1]
-    path = np.vstack([s] + [graph.points[i] for i in inner] + [g])
+    path = np.vstack([s, *(graph.points[i] for i in inner), g])
     info["vertices"] = [int(graph.vertex_index[i]) for i in inner]
     return PlanResult(path=path, success=True, message="ok", planner="visibility",
                       runtime_s=runtime, info=info)

@@ -9,12 +9,36 @@ size and run in numba (:mod:`._geometry_kernels`).
 
 JSON form: ``{"bounds": [xmin, ymin, xmax, ymax], "obstacles": [[[x, y], ...], ...]}``
 (an optional ``"name"``). Built-in worlds: :meth:`PolygonWorld.builtin`.
+
+Decisions on awkward input (each tested):
+
+* Coordinates must be real numbers (int or float, not bool, not strings such
+  as ``"1.5"``) and finite; JSON ``NaN``/``Infinity`` are refused.
+* A polygon with fewer than 3 vertices, zero area (all vertices collinear)
+  or crossing edges is refused, naming the obstacle. Collinear consecutive
+  vertices on an edge are accepted (a 180 deg corner).
+* Two obstacles that overlap or touch (within :attr:`PolygonWorld.eps`) are
+  refused, naming the pair: merge them into one polygon yourself. So the
+  only zero-width gaps left are where an obstacle touches the outer
+  boundary; every planner treats such a contact as closed (no path slips
+  between the obstacle and the wall there).
+* A start or goal on an obstacle's boundary is not free (the obstacles are
+  closed sets); :meth:`PolygonWorld.check_point` says "on the boundary of".
+* Size limits, checked before any quadratic work: at most
+  :data:`MAX_VERTICES` obstacle vertices (derived from the memory of the
+  planners' dense structures, :func:`planner_memory_bytes`); JSON files of at
+  most :data:`MAX_FILE_BYTES` bytes, nested at most :data:`MAX_JSON_DEPTH`
+  levels (checked on the text before parsing).
+
+The world is immutable: every derived array is computed in ``__post_init__``
+and read-only; the planners keep their graphs in their own caches.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,6 +50,48 @@ from subtask_opt.planners.polygon import _kernels as gk
 
 # Relative length tolerance: contact closer than this fraction of the world size counts.
 _REL_EPS = 1e-9
+
+MEMORY_LIMIT_BYTES = 1 << 30
+"""The planners' dense structures may take at most this much memory (1 GiB)."""
+
+_MAKLINK_BYTES_PER_V2 = 240
+"""MAKLINK's candidate links: about 4.5 V^2 candidates (vertex-vertex and vertex-wall
+foot) of ~50 bytes each (end ids, length, sort order, masks); measured ~210 V^2 bytes
+with tracemalloc on random worlds of 216 and 600 vertices."""
+
+
+def planner_memory_bytes(n_vertices: int) -> dict[str, int]:
+    """Estimated peak memory of each polygon planner's graph for ``n_vertices`` vertices.
+
+    ``visibility``: the dense (V + 2)^2 float64 weight matrix, plus its
+    distance and mask temporaries (about 5 such matrices); ``maklink`` (also
+    behind improved Dijkstra and PSO): the candidate links.
+    """
+    v = int(n_vertices)
+    return {"visibility": 5 * (v + 2) ** 2 * 8, "maklink": _MAKLINK_BYTES_PER_V2 * v * v}
+
+
+def _max_vertices() -> int:
+    v = 3
+    while max(planner_memory_bytes(2 * v).values()) <= MEMORY_LIMIT_BYTES:
+        v *= 2
+    lo, hi = v, 2 * v  # bisection: lo fits, hi does not
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if max(planner_memory_bytes(mid).values()) <= MEMORY_LIMIT_BYTES \
+            else (lo, mid)
+    return lo
+
+
+MAX_VERTICES = _max_vertices()
+"""Most obstacle vertices a world may have: the largest V whose planner memory
+(:func:`planner_memory_bytes`) fits in :data:`MEMORY_LIMIT_BYTES` (about 2100)."""
+
+MAX_FILE_BYTES = 8 * 1024 * 1024
+"""Largest world JSON file read (8 MiB; MAX_VERTICES vertices take well under 1 MiB)."""
+
+MAX_JSON_DEPTH = 8
+"""Deepest bracket nesting accepted in a world file (a world needs 4)."""
 
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
@@ -73,65 +139,84 @@ def _seed003() -> PolygonWorld:
     return PolygonWorld(bounds=(0.0, 0.0, 350.0, 350.0), obstacles=hulls, name="seed003")
 
 
-_BUILTINS = {"seed003": _seed003}
+def _seed003_listed() -> PolygonWorld:
+    """seed003 with obstacle 0 in its listed vertex order: a bowtie (two triangles, top and
+    bottom, meeting where its diagonals cross at (53, 219.5)), closed there by a waist
+    0.1 m wide so that it stays one simple polygon."""
+    x0, x1, y0, y1, cx, cy, d = 40.0, 66.0, 151.0, 288.0, 53.0, 219.5, 0.05
+    bowtie = np.array([(x0, y1), (cx - d, cy), (x0, y0), (x1, y0), (cx + d, cy), (x1, y1)])
+    rest = tuple(convex_hull(np.array(v, dtype=float)) for v in _SEED003_VERTICES[1:])
+    return PolygonWorld(bounds=(0.0, 0.0, 350.0, 350.0), obstacles=(bowtie, *rest),
+                        name="seed003-listed")
+
+
+_BUILTINS = {"seed003": _seed003, "seed003-listed": _seed003_listed}
 
 
 @dataclass(frozen=True)
 class PolygonWorld:
-    """A rectangular workspace with polygon obstacles.
+    """A rectangular workspace with polygon obstacles (immutable).
 
     Attributes:
         bounds: ``(xmin, ymin, xmax, ymax)`` of the workspace.
-        obstacles: one (k, 2) float64 array per obstacle, k >= 3, stored
-            counter-clockwise (clockwise input is reversed). A repeated
-            closing vertex is dropped.
+        obstacles: one (k, 2) read-only float64 array per obstacle, k >= 3,
+            stored counter-clockwise (clockwise input is reversed). A
+            repeated closing vertex is dropped.
         name: a label for reports.
 
     Raises:
-        InputDataError: non-finite numbers, empty bounds, a polygon with fewer
-            than 3 vertices, zero area or self-intersections, a polygon
-            outside the bounds, or two obstacles that overlap or touch; the
-            message names the obstacle index.
+        InputDataError: non-numeric or non-finite coordinates, empty bounds,
+            a polygon with fewer than 3 vertices, zero area or
+            self-intersections, a polygon outside the bounds, two obstacles
+            that overlap or touch (the message names the indices), or more
+            than :data:`MAX_VERTICES` vertices in all.
     """
 
     bounds: tuple[float, float, float, float]
     obstacles: tuple[np.ndarray, ...]
     name: str = ""
-    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _verts: np.ndarray = field(init=False, repr=False, compare=False)
+    _offsets: np.ndarray = field(init=False, repr=False, compare=False)
+    _boxes: np.ndarray = field(init=False, repr=False, compare=False)
+    _bounds_array: np.ndarray = field(init=False, repr=False, compare=False)
+    _edges: np.ndarray = field(init=False, repr=False, compare=False)
+    _boundary_edges: np.ndarray = field(init=False, repr=False, compare=False)
+    _eps: float = field(init=False, repr=False, compare=False)
+    _hash: int = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         bounds = _parse_bounds(self.bounds)
-        object.__setattr__(self, "bounds", bounds)
-        if isinstance(self.obstacles, np.ndarray) and self.obstacles.ndim == 2:
-            raise InputDataError(
-                "PolygonWorld.obstacles must be a sequence of (k, 2) arrays, got one 2-D array")
+        if not isinstance(self.name, str):
+            raise InputDataError(f"PolygonWorld.name must be a string, got {self.name!r}")
+        if isinstance(self.obstacles, (str, bytes)) or (
+                isinstance(self.obstacles, np.ndarray) and self.obstacles.ndim == 2):
+            raise InputDataError("PolygonWorld.obstacles must be a sequence of (k, 2) "
+                                 f"vertex lists, got {_short(self.obstacles)}")
         try:
             raw = list(self.obstacles)
         except TypeError:
-            raise InputDataError(
-                f"PolygonWorld.obstacles must be a sequence of polygons, got {self.obstacles!r}"
-            ) from None
+            raise InputDataError("PolygonWorld.obstacles must be a sequence of polygons, "
+                                 f"got {_short(self.obstacles)}") from None
+        _check_vertex_count(raw)
         xmin, ymin, xmax, ymax = bounds
         eps = _REL_EPS * max(xmax - xmin, ymax - ymin)
         polys = tuple(_parse_polygon(i, p, eps) for i, p in enumerate(raw))
-        object.__setattr__(self, "obstacles", polys)
-        object.__setattr__(self, "name", str(self.name))
 
         sizes = [len(p) for p in polys]
         offsets = np.zeros(len(polys) + 1, dtype=np.int64)
         offsets[1:] = np.cumsum(sizes)
-        verts = np.concatenate(polys) if polys else np.zeros((0, 2))
+        verts = np.ascontiguousarray(np.concatenate(polys) if polys else np.zeros((0, 2)))
         boxes = np.array([[p[:, 0].min(), p[:, 1].min(), p[:, 0].max(), p[:, 1].max()]
                           for p in polys]).reshape(-1, 4)
         for i in range(len(polys)):
-            if gk.self_contact(verts, offsets[i], offsets[i + 1], eps) >= 0:
-                raise InputDataError(f"obstacle {i} is not a simple polygon (its edges "
-                                     "intersect or fold back)")
             if (boxes[i, 0] < xmin - eps or boxes[i, 2] > xmax + eps
                     or boxes[i, 1] < ymin - eps or boxes[i, 3] > ymax + eps):
                 raise InputDataError(
                     f"obstacle {i} leaves the bounds {list(bounds)}: its vertices span "
                     f"x {boxes[i, 0]:g}..{boxes[i, 2]:g}, y {boxes[i, 1]:g}..{boxes[i, 3]:g}")
+            if gk.self_contact(verts, offsets[i], offsets[i + 1], eps) >= 0:
+                raise InputDataError(f"obstacle {i} is not a simple polygon (its edges "
+                                     "intersect or fold back)")
         for i in range(len(polys)):
             for j in range(i + 1, len(polys)):
                 if (boxes[i, 0] > boxes[j, 2] + eps or boxes[j, 0] > boxes[i, 2] + eps
@@ -139,41 +224,62 @@ class PolygonWorld:
                     continue
                 if gk.polygons_meet(verts, offsets[i], offsets[i + 1],
                                     offsets[j], offsets[j + 1], eps):
-                    raise InputDataError(f"obstacles {i} and {j} overlap or touch")
+                    raise InputDataError(
+                        f"obstacles {i} and {j} overlap or touch; merge them into one "
+                        "polygon (touching obstacles are refused)")
 
-        for a in (verts, boxes, offsets):
+        rows = [np.hstack([p, np.roll(p, -1, axis=0)]) for p in polys]
+        edges = np.concatenate(rows) if rows else np.zeros((0, 4))
+        x0, y0, x1, y1 = bounds
+        boundary = np.array([[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1],
+                             [x0, y1, x0, y0]], dtype=float)
+        bounds_array = np.array(bounds)
+        for a in (verts, offsets, boxes, edges, boundary, bounds_array, *polys):
             a.flags.writeable = False
-        for p in polys:
-            p.flags.writeable = False
-        self._cache.update(verts=verts, offsets=offsets, boxes=boxes, eps=eps,
-                           bounds_array=np.array(bounds))
+        for key, value in (("bounds", bounds), ("obstacles", polys), ("_verts", verts),
+                           ("_offsets", offsets), ("_boxes", boxes), ("_edges", edges),
+                           ("_boundary_edges", boundary), ("_bounds_array", bounds_array),
+                           ("_eps", eps),
+                           ("_hash", hash((bounds, self.name, verts.tobytes(),
+                                           offsets.tobytes())))):
+            object.__setattr__(self, key, value)
 
     # -- identity (arrays make the generated __eq__ ambiguous) -------------
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, PolygonWorld):
             return NotImplemented
-        return (self.bounds == other.bounds and self.name == other.name
-                and len(self.obstacles) == len(other.obstacles)
+        return (self._hash == other._hash and self.bounds == other.bounds
+                and self.name == other.name and len(self.obstacles) == len(other.obstacles)
                 and all(np.array_equal(a, b) for a, b in zip(self.obstacles, other.obstacles,
                                                                strict=True)))
 
     def __hash__(self) -> int:
-        return hash((self.bounds, self.name, self._cache["verts"].tobytes()))
+        return self._hash
 
     # -- construction --------------------------------------------------------
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> PolygonWorld:
-        """Build from ``{"bounds": [...], "obstacles": [[[x, y], ...], ...], "name"?: str}``."""
+    def from_dict(cls, d: Any, *, name: str = "") -> PolygonWorld:
+        """Build from ``{"bounds": [...], "obstacles": [[[x, y], ...], ...], "name"?: str}``.
+
+        ``name`` is used when the dict has none.
+        """
         if not isinstance(d, dict):
             raise InputDataError(f"a polygon world must be a JSON object, got {type(d).__name__}")
         missing = [k for k in ("bounds", "obstacles") if k not in d]
         if missing:
             raise InputDataError(f"polygon world is missing {', '.join(map(repr, missing))} "
-                                 f"(keys present: {sorted(d)})")
+                                 f"(keys present: {sorted(map(str, d))[:10]})")
         if not isinstance(d["obstacles"], (list, tuple)):
-            raise InputDataError(
-                f"polygon world 'obstacles' must be a list of polygons, got {d['obstacles']!r}")
-        return cls(bounds=d["bounds"], obstacles=tuple(d["obstacles"]), name=d.get("name", ""))
+            raise InputDataError("polygon world 'obstacles' must be a list of polygons, got "
+                                 f"{_short(d['obstacles'])}")
+        if not isinstance(d["bounds"], (list, tuple)):
+            raise InputDataError("polygon world 'bounds' must be a list of four numbers, got "
+                                 f"{_short(d['bounds'])}")
+        label = d.get("name", name) or name
+        if not isinstance(label, str):
+            raise InputDataError(f"polygon world 'name' must be a string, got {_short(label)}")
+        return cls(bounds=tuple(d["bounds"]), obstacles=tuple(d["obstacles"]),  # type: ignore[arg-type]
+                   name=label)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON form (see the module docstring)."""
@@ -184,21 +290,59 @@ class PolygonWorld:
         return out
 
     @classmethod
-    def from_json(cls, path: str | Path) -> PolygonWorld:
-        """Read a world from a JSON file (OSError if unreadable, InputDataError if malformed)."""
-        path = Path(path)
-        text = path.read_text()
+    def from_text(cls, text: str | bytes, *, name: str = "", source: str = "world") -> PolygonWorld:
+        """Parse a world from JSON text (see :meth:`from_json` for the limits).
+
+        Raises:
+            InputDataError: too long, nested too deep, not JSON, NaN/Infinity,
+                or not a valid world; the message starts with ``source``.
+        """
+        if isinstance(text, bytes):
+            if len(text) > MAX_FILE_BYTES:
+                raise InputDataError(f"{source}: {len(text)} bytes is over the limit of "
+                                     f"{MAX_FILE_BYTES} bytes for a world file")
+            try:
+                text = text.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                raise InputDataError(f"{source}: not UTF-8 text ({exc.reason} at byte "
+                                     f"{exc.start})") from None
+        if len(text) > MAX_FILE_BYTES:
+            raise InputDataError(f"{source}: {len(text)} characters is over the limit of "
+                                 f"{MAX_FILE_BYTES} for a world file")
+        depth = json_depth(text)
+        if depth > MAX_JSON_DEPTH:
+            raise InputDataError(f"{source}: brackets nested {depth} deep; a world needs 4, "
+                                 f"at most {MAX_JSON_DEPTH} are accepted")
         try:
-            d = json.loads(text)
+            d = json.loads(text, parse_constant=_refuse_constant)
         except json.JSONDecodeError as exc:
-            raise InputDataError(f"{path}: not valid JSON ({exc})") from None
+            raise InputDataError(f"{source}: not valid JSON ({exc})") from None
+        except ValueError as exc:  # NaN/Infinity, or an integer of > 4300 digits
+            raise InputDataError(f"{source}: {exc}") from None
         try:
-            world = cls.from_dict(d)
+            return cls.from_dict(d, name=name)
         except InputDataError as exc:
-            raise InputDataError(f"{path}: {exc}") from None
-        if not world.name:
-            object.__setattr__(world, "name", path.stem)
-        return world
+            raise InputDataError(f"{source}: {exc}") from None
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> PolygonWorld:
+        """Read a world from a JSON file; its name defaults to the file's stem.
+
+        Files over :data:`MAX_FILE_BYTES` bytes or nested deeper than
+        :data:`MAX_JSON_DEPTH` are refused before parsing.
+
+        Raises:
+            OSError: the file cannot be read.
+            InputDataError: the file is too large or malformed (the message names it).
+        """
+        path = Path(path)
+        size = path.stat().st_size
+        if size > MAX_FILE_BYTES:
+            raise InputDataError(f"{path}: {size} bytes is over the limit of {MAX_FILE_BYTES} "
+                                 "bytes for a world file")
+        with path.open("rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+        return cls.from_text(data, name=path.stem, source=str(path))
 
     def to_json(self, path: str | Path) -> None:
         """Write the world as JSON."""
@@ -209,7 +353,9 @@ class PolygonWorld:
     @classmethod
     def builtin(cls, name: str) -> PolygonWorld:
         """A built-in world: ``"seed003"`` is the 350 x 350 benchmark of seed paper 003
-        (its six obstacles taken as convex hulls)."""
+        (its six obstacles taken as convex hulls); ``"seed003-listed"`` takes the first
+        obstacle in its listed (self-crossing) vertex order, the reading on which the
+        paper's Table 1 is reproduced (``benchmarks/maklink.py --search``)."""
         try:
             return _BUILTINS[name]()
         except KeyError:
@@ -225,43 +371,43 @@ class PolygonWorld:
     @property
     def eps(self) -> float:
         """Length tolerance of the geometric tests (1e-9 of the world size)."""
-        return float(self._cache["eps"])
+        return self._eps
 
     @property
     def vertices(self) -> np.ndarray:
         """(n, 2) every obstacle vertex, obstacle after obstacle (read-only)."""
-        return self._cache["verts"]
+        return self._verts
 
     @property
     def offsets(self) -> np.ndarray:
         """(n_obstacles + 1,) obstacle i owns ``vertices[offsets[i]:offsets[i + 1]]``."""
-        return self._cache["offsets"]
+        return self._offsets
 
     @property
     def edges(self) -> np.ndarray:
         """(m, 4) every obstacle edge as x1, y1, x2, y2 (counter-clockwise order)."""
-        if "edges" not in self._cache:
-            rows = [np.hstack([p, np.roll(p, -1, axis=0)]) for p in self.obstacles]
-            e = np.concatenate(rows) if rows else np.zeros((0, 4))
-            e.flags.writeable = False
-            self._cache["edges"] = e
-        return self._cache["edges"]
+        return self._edges
 
     @property
     def boundary_edges(self) -> np.ndarray:
         """(4, 4) the edges of the bounding box (bottom, right, top, left)."""
-        if "boundary_edges" not in self._cache:
-            x0, y0, x1, y1 = self.bounds
-            e = np.array([[x0, y0, x1, y0], [x1, y0, x1, y1], [x1, y1, x0, y1],
-                          [x0, y1, x0, y0]], dtype=float)
-            e.flags.writeable = False
-            self._cache["boundary_edges"] = e
-        return self._cache["boundary_edges"]
+        return self._boundary_edges
+
+    @property
+    def on_bounds(self) -> np.ndarray:
+        """(n,) bool over :attr:`vertices`: the vertex touches the outer boundary.
+
+        Such a vertex closes the gap between its obstacle and the wall; a
+        shortest path never bends there (the free angle on either side is
+        below 180 deg), so the graph planners leave it out.
+        """
+        v, (x0, y0, x1, y1), e = self._verts, self.bounds, self._eps
+        return ((np.abs(v[:, 0] - x0) <= e) | (np.abs(v[:, 0] - x1) <= e)
+                | (np.abs(v[:, 1] - y0) <= e) | (np.abs(v[:, 1] - y1) <= e))
 
     def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
         """``(verts, offsets, boxes, bounds, eps)`` as the numba kernels take them."""
-        c = self._cache
-        return c["verts"], c["offsets"], c["boxes"], c["bounds_array"], c["eps"]
+        return self._verts, self._offsets, self._boxes, self._bounds_array, self._eps
 
     def in_bounds(self, p: Any) -> bool:
         """Whether p lies in the closed bounding box."""
@@ -284,29 +430,29 @@ class PolygonWorld:
         """Return p as a float array, or raise naming ``label`` and the value.
 
         Raises:
-            InputDataError: p is not two finite numbers.
-            UnreachableError: p is outside the bounds or inside (or on) an obstacle.
+            InputDataError: p is not two finite real numbers.
+            UnreachableError: p is outside the bounds, inside an obstacle or
+                on an obstacle's boundary.
         """
-        try:
-            arr = np.asarray(p, dtype=float).reshape(-1)
-        except (TypeError, ValueError):
-            raise InputDataError(f"{label} must be two numbers x, y, got {p!r}") from None
-        if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-            raise InputDataError(f"{label} must be two finite numbers x, y, got {p!r}")
+        arr = _point_array(label, p)
         shown = f"({arr[0]:g}, {arr[1]:g})"
         if not self.in_bounds(arr):
             raise UnreachableError(f"{label} {shown} is outside the world bounds "
                                    f"{list(self.bounds)}")
         k = self.obstacle_at(arr)
         if k >= 0:
-            raise UnreachableError(f"{label} {shown} is inside obstacle {k}")
+            verts, offsets, _, _, eps = self.kernel_arrays()
+            where = ("on the boundary of" if gk.point_in_polygon(
+                arr[0], arr[1], verts, offsets[k], offsets[k + 1], eps) == 0 else "inside")
+            raise UnreachableError(f"{label} {shown} is {where} obstacle {k}")
         return arr
 
     def segment_free(self, p: Any, q: Any) -> bool:
         """The segment pq stays in the bounds and never enters an obstacle's interior.
 
         Touching vertices or sliding along edges is allowed, so shortest paths
-        through vertices count as free.
+        through vertices count as free; sliding along a wall past a point
+        where an obstacle touches it is not.
         """
         px, py = _xy(p)
         qx, qy = _xy(q)
@@ -327,6 +473,22 @@ class PolygonWorld:
         if len(self.obstacles):
             d = min(d, gk.distance_to_edges(x, y, self.edges))
         return float(d)
+
+
+def load_world(spec: str | Path) -> PolygonWorld:
+    """A built-in world by name, or a world read from a ``.json`` file.
+
+    Raises:
+        InputDataError: neither a built-in name nor a .json path, or a malformed file.
+        OSError: the file cannot be read.
+    """
+    text = str(spec)
+    if text in _BUILTINS:
+        return PolygonWorld.builtin(text)
+    if not text.lower().endswith(".json"):
+        raise InputDataError(f"world must be one of {sorted(_BUILTINS)} or a .json file, "
+                             f"got {text!r}")
+    return PolygonWorld.from_json(text)
 
 
 def interior_point(poly: np.ndarray) -> np.ndarray:
@@ -371,36 +533,102 @@ def same_homotopy(world: PolygonWorld, path_a: np.ndarray, path_b: np.ndarray) -
 
 
 def _xy(p: Any) -> tuple[float, float]:
+    arr = _point_array("a point", p)
+    return float(arr[0]), float(arr[1])
+
+
+def _point_array(label: str, p: Any) -> np.ndarray:
+    """p as a (2,) float array of finite real numbers, or InputDataError naming ``label``."""
+    if isinstance(p, (str, bytes)):
+        raise InputDataError(f"{label} must be two numbers x, y, got {_short(p)}")
     try:
-        x, y = (float(v) for v in np.asarray(p, dtype=float).reshape(-1))
+        raw = np.asarray(p)
     except (TypeError, ValueError):
-        raise InputDataError(f"a point must be two numbers x, y, got {p!r}") from None
-    return x, y
+        raise InputDataError(f"{label} must be two numbers x, y, got {_short(p)}") from None
+    if raw.dtype.kind not in "iuf":
+        raise InputDataError(f"{label} must be two numbers x, y, got {_short(p)}")
+    arr = raw.astype(float).reshape(-1)
+    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
+        raise InputDataError(f"{label} must be two finite numbers x, y, got {_short(p)}")
+    return arr
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    """repr of ``value`` cut to ``limit`` characters (error messages stay one short line)."""
+    try:
+        text = repr(value)
+    except Exception:  # noqa: BLE001 - a repr that fails must not hide the real error
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _real(value: Any) -> float | None:
+    """A finite float from an int or float (numpy ones too); None for anything else."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return None
+    try:
+        f = float(value)
+    except OverflowError:  # an int too large for a float
+        return None
+    return f if math.isfinite(f) else None
 
 
 def _parse_bounds(bounds: Any) -> tuple[float, float, float, float]:
     try:
-        b = tuple(float(v) for v in bounds)
-    except (TypeError, ValueError):
-        raise InputDataError(
-            f"PolygonWorld.bounds must be four numbers xmin, ymin, xmax, ymax, got {bounds!r}"
-        ) from None
-    if len(b) != 4 or not all(math.isfinite(v) for v in b):
-        raise InputDataError(
-            f"PolygonWorld.bounds must be four finite numbers xmin, ymin, xmax, ymax, "
-            f"got {bounds!r}")
-    if not (b[0] < b[2] and b[1] < b[3]):
+        items = list(bounds) if not isinstance(bounds, (str, bytes)) else None
+    except TypeError:
+        items = None
+    if items is None or len(items) != 4:
+        raise InputDataError("PolygonWorld.bounds must be four numbers xmin, ymin, xmax, ymax, "
+                             f"got {_short(bounds)}")
+    b = tuple(_real(v) for v in items)
+    if any(v is None for v in b):
+        raise InputDataError("PolygonWorld.bounds must be four finite numbers xmin, ymin, xmax, "
+                             f"ymax, got {_short(bounds)}")
+    if not (b[0] < b[2] and b[1] < b[3]):  # type: ignore[operator]
         raise InputDataError(
             f"PolygonWorld.bounds must have xmin < xmax and ymin < ymax, got {list(b)}")
     return b  # type: ignore[return-value]
 
 
+def _check_vertex_count(raw: list[Any]) -> None:
+    """Refuse more than MAX_VERTICES vertices before any per-vertex work."""
+    total = 0
+    for p in raw:
+        try:
+            total += len(p)
+        except TypeError:
+            continue  # not a sequence: _parse_polygon names it
+    if total > MAX_VERTICES:
+        need = max(planner_memory_bytes(total).values())
+        raise InputDataError(
+            f"the world has {total} obstacle vertices; the planners' dense graphs would need "
+            f"about {need / 2**20:.0f} MiB, over the limit of {MEMORY_LIMIT_BYTES / 2**20:.0f} "
+            f"MiB: at most {MAX_VERTICES} vertices")
+
+
 def _parse_polygon(i: int, poly: Any, eps: float) -> np.ndarray:
-    try:
-        p = np.array(poly, dtype=float)
-    except (TypeError, ValueError):
-        raise InputDataError(f"obstacle {i} must be a list of [x, y] vertices, got {poly!r}"
-                             ) from None
+    if isinstance(poly, np.ndarray):
+        if poly.dtype.kind not in "iuf":
+            raise InputDataError(f"obstacle {i} must hold numbers, got dtype {poly.dtype}")
+        p = poly.astype(float)
+    else:
+        if isinstance(poly, (str, bytes, dict)) or not hasattr(poly, "__len__"):
+            raise InputDataError(f"obstacle {i} must be a list of [x, y] vertices, got "
+                                 f"{_short(poly)}")
+        rows = []
+        for k, v in enumerate(poly):
+            if isinstance(v, np.ndarray) and v.dtype.kind in "iuf":
+                v = v.tolist()
+            if not isinstance(v, (list, tuple)) or len(v) != 2:
+                raise InputDataError(f"obstacle {i} vertex {k} must be a pair [x, y], got "
+                                     f"{_short(v)}")
+            x, y = _real(v[0]), _real(v[1])
+            if x is None or y is None:
+                raise InputDataError(f"obstacle {i} vertex {k} must be two finite numbers, got "
+                                     f"{_short(v)}")
+            rows.append((x, y))
+        p = np.array(rows, dtype=float).reshape(-1, 2)
     if p.ndim != 2 or p.shape[1] != 2:
         raise InputDataError(
             f"obstacle {i} must be a (k, 2) list of [x, y] vertices, got shape {p.shape}")
@@ -413,7 +641,28 @@ def _parse_polygon(i: int, poly: Any, eps: float) -> np.ndarray:
     area = signed_area(p)
     extent = float(np.max(np.ptp(p, axis=0)))
     if abs(area) <= eps * max(extent, eps):
-        raise InputDataError(f"obstacle {i} is degenerate (area {abs(area):g})")
+        raise InputDataError(f"obstacle {i} is degenerate (area {abs(area):g}: its vertices "
+                             "are collinear)")
     if area < 0:
         p = p[::-1]
     return np.ascontiguousarray(p)
+
+
+def json_depth(text: str) -> int:
+    """Deepest nesting of ``[`` / ``{`` in JSON text, brackets inside strings ignored.
+
+    Runs on the raw text before parsing (vectorised), so a deeply nested file
+    cannot exhaust the parser's recursion.
+    """
+    stripped = _JSON_STRING.sub('""', text).encode("utf-8", "replace")
+    codes = np.frombuffer(stripped, dtype=np.uint8)
+    step = ((codes == ord("[")) | (codes == ord("{"))).astype(np.int64) - (
+        (codes == ord("]")) | (codes == ord("}")))
+    return int(max(np.max(np.cumsum(step), initial=0), 0))
+
+
+_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+
+
+def _refuse_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not a finite number; world coordinates must be finite")

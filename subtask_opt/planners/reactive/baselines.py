@@ -15,7 +15,14 @@ sensors instead of a certainty grid, so that the comparison with
 
 Both share one speed law: full speed when aligned and clear, slowing with the
 heading error and to zero when an echo lies in the swept corridor closer than
-``radius + safety_margin``. Neither escapes local minima.
+``radius + safety_margin``, and one guard: the arc of the command is checked
+against the walls predicted from the current scan (:func:`.sonar.predict_scan`,
+as the fuzzy navigator's admissibility filter does) and the speed is cut until
+the arc keeps ``radius + safety_margin`` from them (turning in place when no
+speed does). Neither escapes local minima.
+
+The parameter classes are :class:`SonarVFFParams` and :class:`SonarVFHParams`
+(the grid family's :mod:`subtask_opt.planners.grid.vff` has its own ``VFFParams``).
 """
 
 from __future__ import annotations
@@ -26,9 +33,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from subtask_opt.base.errors import require_non_negative, require_positive
+from subtask_opt.base.geometry import wrap_angle
 from subtask_opt.planners.reactive.fuzzy import NavDecision
-from subtask_opt.planners.reactive.sonar import SonarRing
-from subtask_opt.planners.reactive.unicycle import Unicycle, wrap_angle
+from subtask_opt.planners.reactive.sonar import SonarRing, predict_scan
+from subtask_opt.planners.reactive.unicycle import Unicycle, integrate_arc
+
+_GUARD_SPEEDS = (1.0, 0.75, 0.5, 0.25)
+"""Fractions of the commanded speed the guard tries, fastest first."""
+
+
+def _guard(robot: Unicycle, sonar: SonarRing, pose: np.ndarray, ranges: np.ndarray,
+           v: float, omega: float, safety_margin: float) -> float:
+    """The largest of ``v * _GUARD_SPEEDS`` whose arc (end and midpoint) keeps
+    ``radius + safety_margin`` from the walls predicted from ``ranges``; 0 if none."""
+    if v <= 0.0:
+        return 0.0
+    speeds = v * np.asarray(_GUARD_SPEEDS)
+    cand = integrate_arc(pose, speeds, np.full(speeds.shape, omega), robot.dt)
+    mid = integrate_arc(pose, speeds, np.full(speeds.shape, omega), 0.5 * robot.dt)[:, :2]
+    _, clearance = predict_scan(sonar, ranges, pose, cand, mid)
+    ok = np.flatnonzero(clearance >= robot.radius + safety_margin)
+    return float(speeds[ok[0]]) if ok.size else 0.0
 
 
 def _command(robot: Unicycle, sonar: SonarRing, ranges: np.ndarray, heading_error: float,
@@ -47,7 +72,7 @@ def _command(robot: Unicycle, sonar: SonarRing, ranges: np.ndarray, heading_erro
 
 
 @dataclass(frozen=True)
-class VFFParams:
+class SonarVFFParams:
     """Virtual force field gains.
 
     Attributes:
@@ -63,10 +88,10 @@ class VFFParams:
     slow_distance: float = 0.6
 
     def __post_init__(self) -> None:
-        require_positive("VFFParams", "attraction", self.attraction)
-        require_non_negative("VFFParams", "repulsion", self.repulsion)
-        require_non_negative("VFFParams", "safety_margin", self.safety_margin)
-        require_positive("VFFParams", "slow_distance", self.slow_distance)
+        require_positive("SonarVFFParams", "attraction", self.attraction)
+        require_non_negative("SonarVFFParams", "repulsion", self.repulsion)
+        require_non_negative("SonarVFFParams", "safety_margin", self.safety_margin)
+        require_positive("SonarVFFParams", "slow_distance", self.slow_distance)
 
 
 class VFFNavigator:
@@ -74,10 +99,10 @@ class VFFNavigator:
 
     name = "vff"
 
-    def __init__(self, robot: Unicycle, sonar: SonarRing, params: VFFParams | None = None):
+    def __init__(self, robot: Unicycle, sonar: SonarRing, params: SonarVFFParams | None = None):
         self.robot = robot
         self.sonar = sonar
-        self.params = params or VFFParams()
+        self.params = params or SonarVFFParams()
 
     def reset(self) -> None:
         """Stateless: nothing to forget."""
@@ -93,14 +118,15 @@ class VFFNavigator:
             r = np.maximum(ranges[echo], 1e-3)
             w = p.repulsion * (1.0 / r - 1.0 / self.sonar.max_range) / r
             force = force - np.array([np.sum(w * np.cos(a)), np.sum(w * np.sin(a))])
-        err = wrap_angle(math.atan2(force[1], force[0]) - heading)
+        err = float(wrap_angle(math.atan2(force[1], force[0]) - heading))
         v, omega = _command(self.robot, self.sonar, ranges, err, p.safety_margin,
                             p.slow_distance)
+        v = _guard(self.robot, self.sonar, pose, ranges, v, omega, p.safety_margin)
         return NavDecision(v=v, omega=omega, target=np.asarray(goal, dtype=float))
 
 
 @dataclass(frozen=True)
-class VFHParams:
+class SonarVFHParams:
     """Vector field histogram settings.
 
     Attributes:
@@ -115,9 +141,9 @@ class VFHParams:
     slow_distance: float = 0.6
 
     def __post_init__(self) -> None:
-        require_positive("VFHParams", "threshold_distance", self.threshold_distance)
-        require_non_negative("VFHParams", "safety_margin", self.safety_margin)
-        require_positive("VFHParams", "slow_distance", self.slow_distance)
+        require_positive("SonarVFHParams", "threshold_distance", self.threshold_distance)
+        require_non_negative("SonarVFHParams", "safety_margin", self.safety_margin)
+        require_positive("SonarVFHParams", "slow_distance", self.slow_distance)
 
 
 class VFHNavigator:
@@ -125,10 +151,10 @@ class VFHNavigator:
 
     name = "vfh"
 
-    def __init__(self, robot: Unicycle, sonar: SonarRing, params: VFHParams | None = None):
+    def __init__(self, robot: Unicycle, sonar: SonarRing, params: SonarVFHParams | None = None):
         self.robot = robot
         self.sonar = sonar
-        self.params = params or VFHParams()
+        self.params = params or SonarVFHParams()
 
     def reset(self) -> None:
         """Stateless: nothing to forget."""
@@ -148,7 +174,7 @@ class VFHNavigator:
         p = self.params
         heading = float(pose[2])
         goal = np.asarray(goal, dtype=float)
-        g = wrap_angle(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - heading)
+        g = float(wrap_angle(math.atan2(goal[1] - pose[1], goal[0] - pose[0]) - heading))
         a = self.sonar.angles
         free = self.free_directions(ranges)
         half_fov = 0.5 * math.radians(self.sonar.fov_deg)
@@ -164,4 +190,5 @@ class VFHNavigator:
             err = float(a[idx[np.argmin(np.abs(a[idx] - g))]])
         v, omega = _command(self.robot, self.sonar, ranges, err, p.safety_margin,
                             p.slow_distance)
+        v = _guard(self.robot, self.sonar, pose, ranges, v, omega, p.safety_margin)
         return NavDecision(v=v, omega=omega, target=goal)

@@ -12,6 +12,13 @@ to the candidate of largest decision membership:
 * decision ``muD = min(muG1, muG2, muG3)`` (eq. 7), the best candidate is the
   argmax (the paper's Table 1: candidate 4, ``muD = 0.4``).
 
+Eq. 1 weighs the goals, ``D = G1^w1 ∩ ... ∩ Gm^wm``: a goal of importance
+``w_j`` enters the intersection with membership ``muGj ** w_j`` (Yager's
+weighting), so a more important goal (``w_j > 1``) is harder to satisfy and
+dominates the minimum. The paper names Saaty's eigenvector method for the
+weights (:func:`saaty_weights`) but runs the plain minimum; so do we by
+default (``FuzzyParams.weights = (1, 1, 1)``).
+
 Eq. 5 as printed, ``1 / (1 + d2 / (F_r + d3))``, *increases* with ``F_r``,
 which contradicts its own goal (``F_r < C2``) and its special case (1 when
 ``F_r = 0``); we use the reciprocal ratio, ``muG2 = 1 / (1 + (F_r + d3) / d2)``,
@@ -49,18 +56,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from subtask_opt.base.errors import (
     InputDataError,
+    ParameterError,
     require_in_range,
     require_int,
     require_non_negative,
     require_positive,
 )
+from subtask_opt.base.geometry import wrap_angle
 from subtask_opt.planners.reactive.sonar import SonarRing, predict_scan
-from subtask_opt.planners.reactive.unicycle import Unicycle, integrate_arc, wrap_angle
+from subtask_opt.planners.reactive.unicycle import MAX_GRID, Unicycle, integrate_arc
+
+MAX_WEIGHT = 100.0
+"""Largest importance weight of a fuzzy goal."""
 
 
 @dataclass(frozen=True)
@@ -87,6 +100,9 @@ class FuzzyParams:
         follow_distance: distance kept from the followed wall (> 0); echoes
             beyond twice this distance count as "wall lost".
         max_follow_steps: decisions after which an episode is abandoned (>= 1).
+        weights: importance ``(w1, w2, w3)`` of G1, G2, G3 in eq. 1, each in
+            ``(0, MAX_WEIGHT]``; ``(1, 1, 1)`` is the paper's plain minimum
+            (see :func:`saaty_weights` for weights from pairwise comparisons).
     """
 
     c1: float = 0.6
@@ -103,20 +119,80 @@ class FuzzyParams:
     trap_steps: int = 10
     follow_distance: float = 0.8
     max_follow_steps: int = 80
+    weights: tuple[float, float, float] = (1.0, 1.0, 1.0)
 
     def __post_init__(self) -> None:
         require_positive("FuzzyParams", "c1", self.c1)
         require_positive("FuzzyParams", "d1", self.d1)
         require_positive("FuzzyParams", "d2", self.d2)
         require_non_negative("FuzzyParams", "d3", self.d3)
-        require_int("FuzzyParams", "n_headings", self.n_headings, 1)
-        require_int("FuzzyParams", "n_speeds", self.n_speeds, 1)
+        require_int("FuzzyParams", "n_headings", self.n_headings, 1, MAX_GRID)
+        require_int("FuzzyParams", "n_speeds", self.n_speeds, 1, MAX_GRID)
         require_positive("FuzzyParams", "virtual_target_distance", self.virtual_target_distance)
         require_non_negative("FuzzyParams", "safety_margin", self.safety_margin)
         require_in_range("FuzzyParams", "wall_front_angle", self.wall_front_angle, 0.0, math.pi)
         require_int("FuzzyParams", "trap_steps", self.trap_steps, 0)
         require_positive("FuzzyParams", "follow_distance", self.follow_distance)
         require_int("FuzzyParams", "max_follow_steps", self.max_follow_steps, 1)
+        object.__setattr__(self, "weights", check_weights("FuzzyParams.weights", self.weights,
+                                                          goals=3))
+
+
+def check_weights(owner: str, weights: Any, *, goals: int) -> tuple[float, ...]:
+    """``weights`` as a tuple of ``goals`` floats in ``(0, MAX_WEIGHT]``, or a ParameterError."""
+    try:
+        w = tuple(weights)
+    except TypeError:
+        raise ParameterError(f"{owner} must be {goals} numbers, got {weights!r}") from None
+    if len(w) != goals:
+        raise ParameterError(f"{owner} must be {goals} numbers, got {weights!r}")
+    out = []
+    for j, wj in enumerate(w):
+        ok = not isinstance(wj, bool) and isinstance(wj, (int, float, np.integer, np.floating))
+        if not ok or not 0.0 < float(wj) <= MAX_WEIGHT:
+            raise ParameterError(f"{owner}[{j}] must be a number in (0, {MAX_WEIGHT:g}], "
+                                 f"got {wj!r}")
+        out.append(float(wj))
+    return tuple(out)
+
+
+def saaty_weights(pairwise: Any) -> tuple[np.ndarray, float]:
+    """Importance weights from a pairwise-comparison matrix (Saaty's eigenvector method).
+
+    ``pairwise[i][j]`` says how much more important goal i is than goal j
+    (positive, reciprocal: ``a_ji = 1 / a_ij``, ones on the diagonal). The
+    weights are the principal (Perron) eigenvector, scaled so that they sum to
+    the number of goals m (Yager: equal importance gives all ones, the plain
+    minimum). For a consistent matrix, ``a_ij = v_i / v_j``, this is
+    ``m v / sum(v)`` exactly.
+
+    Returns:
+        ``(weights, consistency_index)`` with ``CI = (lambda_max - m) / (m - 1)``
+        (0 for a consistent matrix; 0 when m = 1).
+
+    Raises:
+        InputDataError: not a square, positive, reciprocal matrix of finite numbers.
+    """
+    try:
+        a = np.asarray(pairwise, dtype=float)
+    except (TypeError, ValueError):
+        raise InputDataError(f"pairwise comparisons must be a square matrix of numbers, "
+                             f"got {pairwise!r}") from None
+    if a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] == 0:
+        raise InputDataError(f"pairwise comparisons must be a square (m, m) matrix, got shape "
+                             f"{a.shape}")
+    if not np.all(np.isfinite(a)) or np.any(a <= 0):
+        raise InputDataError("pairwise comparisons must be finite and > 0")
+    if not np.allclose(a * a.T, 1.0, rtol=1e-9, atol=0.0):
+        raise InputDataError("pairwise comparisons must be reciprocal: a[j][i] = 1 / a[i][j] "
+                             "(and 1 on the diagonal)")
+    m = a.shape[0]
+    vals, vecs = np.linalg.eig(a)
+    k = int(np.argmax(vals.real))
+    v = np.abs(vecs[:, k].real)
+    weights = m * v / v.sum()
+    ci = float((vals[k].real - m) / (m - 1)) if m > 1 else 0.0
+    return weights, max(ci, 0.0)
 
 
 # ---------------------------------------------------------------- memberships (eq. 3-7)
@@ -151,13 +227,15 @@ def mu_target(dist: np.ndarray) -> np.ndarray:
     return 0.9 - 0.8 * (dist - lo) / (hi - lo)
 
 
-def fuzzy_decision(memberships: np.ndarray,
-                   admissible: np.ndarray | None = None) -> tuple[int, np.ndarray]:
-    """Bellman-Zadeh decision (eq. 7): ``muD = min_j muGj``, best = argmax muD.
+def fuzzy_decision(memberships: np.ndarray, admissible: np.ndarray | None = None,
+                   weights: Any = None) -> tuple[int, np.ndarray]:
+    """Bellman-Zadeh decision (eq. 1, 7): ``muD = min_j muGj ** w_j``, best = argmax muD.
 
     Args:
         memberships: (c, m) membership of each of c candidates in m fuzzy goals.
         admissible: optional (c,) mask; inadmissible candidates cannot be chosen.
+        weights: optional (m,) importance of the goals (each in ``(0, MAX_WEIGHT]``);
+            None or all ones is the plain minimum of eq. 7.
 
     Returns:
         ``(index, mu_d)``: 0-based index of the chosen candidate (the first on
@@ -168,6 +246,10 @@ def fuzzy_decision(memberships: np.ndarray,
         raise InputDataError(f"memberships must be a non-empty (c, m) array, got {mu.shape}")
     if not np.all(np.isfinite(mu)) or mu.min() < 0.0 or mu.max() > 1.0:
         raise InputDataError("memberships must be finite and in [0, 1]")
+    if weights is not None:
+        w = np.array(check_weights("fuzzy_decision.weights", weights, goals=mu.shape[1]))
+        if np.any(w != 1.0):
+            mu = mu ** w[None, :]
     mu_d = mu.min(axis=1)
     score = mu_d if admissible is None else np.where(admissible, mu_d, -1.0)
     return int(np.argmax(score)), mu_d
@@ -181,7 +263,8 @@ class NavDecision:
 
     Attributes:
         v, omega: forward speed and turn rate to hold for one sampling period.
-        mu: (4,) muG1, muG2, muG3, muD of the chosen candidate (NaN for the baselines).
+        mu: (4,) muG1, muG2, muG3 (unweighted) and muD of the chosen candidate
+            (NaN for the baselines).
         escaping: whether the robot is wall-following out of a local minimum.
         target: the point steered to (the goal, or the virtual target).
     """
@@ -248,7 +331,7 @@ class FuzzyNavigator:
         off the goal while an echo is nearer than the goal), whether an echo is nearer
         than the goal, and the distance to the goal."""
         dist = math.hypot(goal[0] - pose[0], goal[1] - pose[1])
-        off = abs(wrap_angle(pose[2] - math.atan2(goal[1] - pose[1], goal[0] - pose[0])))
+        off = abs(float(wrap_angle(pose[2] - math.atan2(goal[1] - pose[1], goal[0] - pose[0]))))
         blocked = float(np.min(ranges)) < min(dist, self.sonar.max_range)
         return off > 0.5 * math.pi and blocked, blocked, dist
 
@@ -302,8 +385,8 @@ class FuzzyNavigator:
             else:
                 # the side whose wall tangent is closer to the current heading
                 u_dir = float(pose[2] + self.sonar.angles[int(np.argmin(ranges))])
-                plus = abs(wrap_angle(u_dir + 0.5 * math.pi - pose[2]))
-                minus = abs(wrap_angle(u_dir - 0.5 * math.pi - pose[2]))
+                plus = abs(float(wrap_angle(u_dir + 0.5 * math.pi - pose[2])))
+                minus = abs(float(wrap_angle(u_dir - 0.5 * math.pi - pose[2])))
                 self._side = 1 if plus <= minus else -1
             self._entry_dist = dist
             self._episode_steps = 0
@@ -316,7 +399,105 @@ class FuzzyNavigator:
             self._update_episode(pose, ranges, goal)
         target = goal if self._side == 0 else self._virtual_target(pose, ranges)
         mu, admissible, _ = self.evaluate(pose, ranges, target)
-        idx, mu_d = fuzzy_decision(mu, admissible)
+        idx, mu_d = fuzzy_decision(mu, admissible, self.params.weights)
         return NavDecision(v=float(self._v[idx]), omega=float(self._omega[idx]),
                            mu=np.append(mu[idx], mu_d[idx]), escaping=self._side != 0,
                            target=target)
+
+
+# ---------------------------------------------------------------- the paper's Table 1
+
+TABLE1_MEMBERSHIPS = np.array([
+    [0.1, 0.2, 0.1, 0.4, 0.5, 0.25, 0.3],    # muG1
+    [0.2, 0.5, 0.05, 0.5, 0.1, 0.3, 0.2],    # muG2
+    [0.3, 0.6, 0.4, 0.7, 0.3, 0.6, 0.3],     # muG3
+]).T
+"""The paper's Table 1: memberships of seven candidates (rows) in G1, G2, G3 (columns)."""
+TABLE1_PAPER_MU_D = (0.1, 0.2, 0.05, 0.4, 0.1, 0.25, 0.2)
+"""The decision memberships printed in Table 1."""
+TABLE1_PAPER_CHOICE = 4
+"""The candidate (1-based) the paper chooses from Table 1."""
+
+
+@dataclass(frozen=True)
+class Table1Report:
+    """Table 1 recomputed beside the paper's numbers.
+
+    Attributes:
+        memberships: (7, 3) the table's muG1, muG2, muG3.
+        weights: the goal weights used (all ones: the paper's plain minimum).
+        mu_d: (7,) our decision memberships; paper_mu_d: the paper's.
+        choice, paper_choice: chosen candidate (1-based), ours and the paper's.
+    """
+
+    memberships: np.ndarray
+    weights: tuple[float, ...]
+    mu_d: np.ndarray
+    choice: int
+    paper_mu_d: tuple[float, ...] = TABLE1_PAPER_MU_D
+    paper_choice: int = TABLE1_PAPER_CHOICE
+
+    @property
+    def weighted(self) -> bool:
+        """Whether the goals are weighted (then the paper's plain-minimum numbers differ)."""
+        return any(w != 1.0 for w in self.weights)
+
+    @property
+    def matches(self) -> bool:
+        """Whether our decision memberships and choice equal the paper's (to 1e-12)."""
+        return (self.choice == self.paper_choice
+                and bool(np.allclose(self.mu_d, self.paper_mu_d, rtol=0.0, atol=1e-12)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"memberships": self.memberships.tolist(), "weights": list(self.weights),
+                "mu_d": self.mu_d.tolist(), "choice": self.choice,
+                "paper_mu_d": list(self.paper_mu_d), "paper_choice": self.paper_choice,
+                "weighted": self.weighted, "matches": self.matches}
+
+    def lines(self) -> list[str]:
+        """The table as printed by ``bench fuzzy-table``."""
+        out = [f"{'candidate':<12}" + "".join(f"{i + 1:>7}" for i in range(len(self.mu_d)))]
+        for j in range(self.memberships.shape[1]):
+            out.append(f"{'muG' + str(j + 1):<12}"
+                       + "".join(f"{v:>7.3g}" for v in self.memberships[:, j]))
+        out.append(f"{'muD paper':<12}" + "".join(f"{v:>7.3g}" for v in self.paper_mu_d))
+        out.append(f"{'muD ours':<12}" + "".join(f"{v:>7.3g}" for v in self.mu_d))
+        out.append(f"chosen candidate: paper {self.paper_choice}, ours {self.choice} "
+                   f"(muD {self.mu_d[self.choice - 1]:.3g}); weights "
+                   f"{', '.join(f'{w:.3g}' for w in self.weights)}; "
+                   f"{'matches the paper' if self.matches else 'differs from the paper'}")
+        return out
+
+
+def table1(weights: Any = None) -> Table1Report:
+    """Recompute the paper's Table 1 with :func:`fuzzy_decision` (``weights``: eq. 1)."""
+    w = (1.0, 1.0, 1.0) if weights is None else check_weights("table1.weights", weights, goals=3)
+    idx, mu_d = fuzzy_decision(TABLE1_MEMBERSHIPS, weights=w)
+    return Table1Report(memberships=TABLE1_MEMBERSHIPS.copy(), weights=tuple(w), mu_d=mu_d,
+                        choice=idx + 1)
+
+
+def reciprocal_matrix(upper: Any) -> np.ndarray:
+    """The (m, m) pairwise-comparison matrix from its strict upper triangle, row by row
+    (``a12, a13, ..., a1m, a23, ...``): ones on the diagonal, ``a_ji = 1 / a_ij``.
+
+    Raises:
+        InputDataError: a count that is not m (m - 1) / 2 for some m >= 2, or a
+            value that is not a finite number > 0.
+    """
+    try:
+        u = np.asarray(upper, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputDataError(f"pairwise comparisons must be numbers, got {upper!r}") from None
+    m = int(round((1 + math.sqrt(1 + 8 * u.size)) / 2))
+    if u.size == 0 or m * (m - 1) // 2 != u.size:
+        raise InputDataError(f"the upper triangle of an (m, m) comparison matrix has "
+                             f"m (m - 1) / 2 entries (1, 3, 6, ...), got {u.size}")
+    if not np.all(np.isfinite(u)) or np.any(u <= 0):
+        raise InputDataError(f"pairwise comparisons must be finite numbers > 0, got "
+                             f"{u.tolist()}")
+    a = np.ones((m, m))
+    iu = np.triu_indices(m, 1)
+    a[iu] = u
+    a[(iu[1], iu[0])] = 1.0 / u
+    return a

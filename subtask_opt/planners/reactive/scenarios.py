@@ -9,24 +9,44 @@ metres (the robot defaults of :class:`.unicycle.Unicycle` are sized for them):
 * ``corridor`` - a corridor whose straight line to the goal is blocked by a
   wall followed by a row of boxes (Fig. 9).
 
-:func:`random_scenario` builds cluttered worlds whose free space provably
+:func:`random_navigation_scenario` builds cluttered worlds whose free space provably
 connects start and goal for the robot's body: every obstacle is a convex
 polygon inscribed in a disc, the discs are pairwise farther apart than
 ``gap`` and at least ``gap`` from the boundary, so the obstacles grown by
 ``gap / 2`` stay disjoint convex sets off the walls, and the complement of
 such sets in a rectangle is connected.
+
+Files: a scenario is stored as JSON ``{"world": {...}, "start": [x, y,
+heading], "goal": [x, y], "name"?: str}`` (the world in
+:class:`~subtask_opt.planners.polygon.world.PolygonWorld`'s JSON form, the
+heading in radians); :meth:`Scenario.from_dict` and :meth:`Scenario.from_json`
+read it and raise :class:`~subtask_opt.base.errors.InputDataError` for
+anything malformed. :func:`resolve_world` accepts a scenario name, a built-in
+world, a world file or a scenario file.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError, ParameterError, require_int, require_positive
+from subtask_opt.base.errors import (
+    InputDataError,
+    ParameterError,
+    SubtaskOptError,
+    UnreachableError,
+    require_int,
+    require_positive,
+)
 from subtask_opt.planners.polygon.world import PolygonWorld
+
+MAX_SUITE = 1_000_000
+"""Most scenarios a random suite may hold."""
 
 PAPER_SCENARIOS = ("simple", "u-trap", "corridor")
 
@@ -40,9 +60,95 @@ class Scenario:
     start: tuple[float, float, float]
     goal: tuple[float, float]
 
-    def to_dict(self) -> dict:
+    def __post_init__(self) -> None:
+        if not isinstance(self.world, PolygonWorld):
+            raise InputDataError(f"Scenario.world must be a PolygonWorld, got "
+                                 f"{type(self.world).__name__}")
+        object.__setattr__(self, "name", str(self.name))
+        start = _numbers("Scenario.start", self.start, 3)
+        goal = _numbers("Scenario.goal", self.goal, 2)
+        self.world.check_point("start", start[:2])
+        self.world.check_point("goal", goal)
+        object.__setattr__(self, "start", (start[0], start[1], start[2]))
+        object.__setattr__(self, "goal", (goal[0], goal[1]))
+
+    def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "world": self.world.to_dict(),
                 "start": list(self.start), "goal": list(self.goal)}
+
+    @classmethod
+    def from_dict(cls, d: Any) -> Scenario:
+        """Build from the JSON form (see the module docstring).
+
+        Raises:
+            InputDataError: not an object, a missing key, or a malformed world,
+                start or goal (start and goal must lie in the world's free space).
+        """
+        if not isinstance(d, dict):
+            raise InputDataError(f"a scenario must be a JSON object, got {type(d).__name__}")
+        missing = [k for k in ("world", "start", "goal") if k not in d]
+        if missing:
+            raise InputDataError(f"scenario is missing {', '.join(map(repr, missing))} "
+                                 f"(keys present: {sorted(map(str, d))})")
+        name = d.get("name", "")
+        if not isinstance(name, str):
+            raise InputDataError(f"scenario 'name' must be a string, got {name!r}")
+        world = world_from_dict(d["world"])
+        try:
+            return cls(name or world.name, world, d["start"], d["goal"])
+        except UnreachableError as exc:
+            raise InputDataError(f"scenario: {exc}") from None
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> Scenario:
+        """Read a scenario file (OSError if unreadable, InputDataError if malformed)."""
+        path = Path(path)
+        text = path.read_text(encoding="utf-8", errors="replace")
+        try:
+            d = json.loads(text)
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise InputDataError(f"{path}: not valid JSON ({exc})") from None
+        try:
+            sc = cls.from_dict(d)
+        except InputDataError as exc:
+            raise InputDataError(f"{path}: {exc}") from None
+        if not sc.name:
+            object.__setattr__(sc, "name", path.stem)
+        return sc
+
+    def to_json(self, path: str | Path) -> None:
+        """Write the scenario as JSON."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
+
+
+def world_from_dict(d: Any) -> PolygonWorld:
+    """:meth:`PolygonWorld.from_dict`, with any other error of its parser turned into
+    :class:`InputDataError` (so that arbitrary JSON never escapes as a TypeError)."""
+    try:
+        return PolygonWorld.from_dict(d)
+    except SubtaskOptError:
+        raise
+    except (TypeError, ValueError, OverflowError, RecursionError) as exc:
+        raise InputDataError(f"malformed polygon world: {exc}") from None
+
+
+def _numbers(label: str, value: Any, n: int) -> tuple[float, ...]:
+    """``n`` finite floats from a list/tuple/array of real numbers, or InputDataError."""
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        raise InputDataError(f"{label} must be {n} numbers, got {value!r}")
+    items = list(value)
+    if len(items) != n or any(isinstance(v, bool) or not isinstance(
+            v, (int, float, np.integer, np.floating)) for v in items):
+        raise InputDataError(f"{label} must be {n} numbers, got {value!r}")
+    try:
+        out = tuple(float(v) for v in items)
+    except OverflowError:
+        raise InputDataError(f"{label} must be {n} finite numbers, got {value!r}") from None
+    if not all(math.isfinite(v) for v in out):
+        raise InputDataError(f"{label} must be {n} finite numbers, got {value!r}")
+    return out
 
 
 def _box(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
@@ -77,7 +183,7 @@ def paper_scenario(name: str) -> Scenario:
 
 @dataclass(frozen=True)
 class RandomSuiteParams:
-    """How :func:`random_scenario` builds a cluttered world.
+    """How :func:`random_navigation_scenario` builds a cluttered world.
 
     Attributes:
         size: side of the square world.
@@ -110,8 +216,9 @@ class RandomSuiteParams:
                                  f"gap {self.gap!r} and max_radius {self.max_radius!r}")
 
 
-def random_scenario(seed: int, params: RandomSuiteParams | None = None) -> Scenario:
+def random_navigation_scenario(seed: int, params: RandomSuiteParams | None = None) -> Scenario:
     """A cluttered square world with start on the left, goal on the right (seeded)."""
+    require_int("random_navigation_scenario", "seed", seed, 0, 2**63 - 1)
     p = params or RandomSuiteParams()
     rng = np.random.default_rng(seed)
     s = p.size
@@ -146,17 +253,21 @@ def random_scenario(seed: int, params: RandomSuiteParams | None = None) -> Scena
                     (float(goal[0]), float(goal[1])))
 
 
-def random_suite(n: int, seed: int, params: RandomSuiteParams | None = None) -> list[Scenario]:
+def random_navigation_suite(n: int, seed: int,
+                            params: RandomSuiteParams | None = None) -> list[Scenario]:
     """``n`` random scenarios; scenario ``i`` depends only on ``(seed, i)``."""
-    require_int("random_suite", "n", n, 1)
+    require_int("random_navigation_suite", "n", n, 1, MAX_SUITE)
+    require_int("random_navigation_suite", "seed", seed, 0, 2**63 - 1)
     seeds = np.random.SeedSequence(seed).spawn(n)
-    return [random_scenario(int(ss.generate_state(1)[0]), params) for ss in seeds]
+    return [random_navigation_scenario(int(ss.generate_state(1)[0]), params) for ss in seeds]
 
 
 def resolve_world(text: str) -> tuple[PolygonWorld, Scenario | None]:
-    """A world by name or path: a paper scenario, a built-in world, or a JSON file.
+    """A world by name or path: a paper scenario, a built-in world, or a JSON file
+    holding a world or a scenario.
 
-    Returns the world and, for a paper scenario, the scenario (default start/goal).
+    Returns the world and, for a paper scenario or a scenario file, the
+    scenario (default start and goal).
     """
     if text in PAPER_SCENARIOS:
         sc = paper_scenario(text)
@@ -164,7 +275,23 @@ def resolve_world(text: str) -> tuple[PolygonWorld, Scenario | None]:
     if text in PolygonWorld.builtin_names():
         return PolygonWorld.builtin(text), None
     if text.endswith(".json") or Path(text).exists():
-        return PolygonWorld.from_json(text), None
+        path = Path(text)
+        try:
+            d = json.loads(path.read_text(encoding="utf-8", errors="replace"))
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise InputDataError(f"{path}: not valid JSON ({exc})") from None
+        try:
+            if isinstance(d, dict) and "world" in d:
+                sc = Scenario.from_dict(d)
+                if not sc.name:
+                    object.__setattr__(sc, "name", path.stem)
+                return sc.world, sc
+            world = world_from_dict(d)
+        except InputDataError as exc:
+            raise InputDataError(f"{path}: {exc}") from None
+        if not world.name:
+            object.__setattr__(world, "name", path.stem)
+        return world, None
     raise InputDataError(f"unknown world {text!r}: give one of "
                          f"{list(PAPER_SCENARIOS) + PolygonWorld.builtin_names()} "
                          "or a JSON file path")

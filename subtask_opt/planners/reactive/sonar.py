@@ -24,13 +24,16 @@ from subtask_opt.base.errors import (
     ParameterError,
     require_in_range,
     require_int,
-    require_non_negative,
     require_positive,
 )
 from subtask_opt.planners.reactive import _kernels as K
 
 if TYPE_CHECKING:
     from subtask_opt.planners.polygon.world import PolygonWorld
+
+
+MAX_BEAMS = 3600
+"""Most sensors a ring may have (one every 0.1 degree over a full circle)."""
 
 
 @dataclass(frozen=True)
@@ -42,11 +45,12 @@ class SonarRing:
     180 degrees) the beams sit at -85, -75, ..., +85 degrees.
 
     Attributes:
-        n_beams: number of sensors (>= 1; 18 on the paper's LCAR robot).
+        n_beams: number of sensors (1 to :data:`MAX_BEAMS`; 18 on the paper's LCAR robot).
         fov_deg: total field of view in degrees, in (0, 360].
         max_range: sensing range ``R_max`` (world units, > 0).
         noise_std: standard deviation of the Gaussian noise added to echoes
-            (readings below ``max_range``), clipped to ``[0, max_range]``.
+            (readings below ``max_range``), in ``[0, max_range]``; noisy readings
+            are clipped to ``[0, max_range]``.
         overlap: width of each predicted wall relative to its beam's sector
             (>= 1 closes the gaps between neighbouring echoes on slanted walls).
     """
@@ -58,10 +62,10 @@ class SonarRing:
     overlap: float = 1.5
 
     def __post_init__(self) -> None:
-        require_int("SonarRing", "n_beams", self.n_beams, 1)
+        require_int("SonarRing", "n_beams", self.n_beams, 1, MAX_BEAMS)
         require_in_range("SonarRing", "fov_deg", self.fov_deg, 1e-9, 360.0)
         require_positive("SonarRing", "max_range", self.max_range)
-        require_non_negative("SonarRing", "noise_std", self.noise_std)
+        require_in_range("SonarRing", "noise_std", self.noise_std, 0.0, self.max_range)
         require_in_range("SonarRing", "overlap", self.overlap, 1.0, 10.0)
 
     @property

@@ -13,15 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from subtask_opt.base.errors import ParameterError, require_positive
+from subtask_opt.base.errors import ParameterError, require_int, require_positive
 from subtask_opt.planners.reactive import _kernels as K
 
-
-def wrap_angle(a: float | np.ndarray) -> float | np.ndarray:
-    """Wrap an angle (or an array of angles) to ``[-pi, pi)``."""
-    if isinstance(a, np.ndarray):
-        return (a + np.pi) % (2.0 * np.pi) - np.pi
-    return (float(a) + math.pi) % (2.0 * math.pi) - math.pi
+MAX_GRID = 1000
+"""Largest number of headings or speeds in the via-point command grid."""
 
 
 @dataclass(frozen=True)
@@ -31,7 +27,8 @@ class Unicycle:
     Attributes:
         max_speed: largest forward speed (world units per second, > 0); the
             robot never drives backwards.
-        max_turn_rate: largest turn rate magnitude (rad/s, > 0).
+        max_turn_rate: largest turn rate magnitude (rad/s, > 0); one period
+            turns at most half a turn (``max_turn_rate * dt <= pi``).
         dt: sampling time (s, > 0): one decision per period.
         radius: radius of the body circle (world units, > 0).
     """
@@ -44,6 +41,11 @@ class Unicycle:
     def __post_init__(self) -> None:
         for name in ("max_speed", "max_turn_rate", "dt", "radius"):
             require_positive("Unicycle", name, getattr(self, name))
+        if self.max_turn_rate * self.dt > math.pi:
+            raise ParameterError(
+                f"Unicycle.max_turn_rate must be <= pi / dt = {math.pi / self.dt:g} rad/s "
+                f"(at most half a turn per sampling period of {self.dt:g} s), "
+                f"got {self.max_turn_rate!r}")
 
     @property
     def max_step(self) -> float:
@@ -70,9 +72,8 @@ class Unicycle:
         Returns:
             ``(v, omega)`` arrays of length ``n_headings * n_speeds``, heading-major.
         """
-        if n_headings < 1 or n_speeds < 1:
-            raise ParameterError(
-                f"n_headings and n_speeds must be >= 1, got {n_headings}, {n_speeds}")
+        require_int("Unicycle.commands", "n_headings", n_headings, 1, MAX_GRID)
+        require_int("Unicycle.commands", "n_speeds", n_speeds, 1, MAX_GRID)
         omegas = np.linspace(-self.max_turn_rate, self.max_turn_rate, n_headings) \
             if n_headings > 1 else np.zeros(1)
         speeds = np.linspace(0.0, self.max_speed, n_speeds) if n_speeds > 1 \

@@ -8,6 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.base.errors import ParameterError, UnreachableError
+from subtask_opt.base.results import Outcome
 from subtask_opt.planners.agv.quadtree import (
     BLACK,
     GREY,
@@ -80,7 +81,11 @@ def test_no_path_and_bad_points():
     occ[:, 4] = True
     world = GridWorld(occ)
     res = plan(world, (0, 0), (7, 7))
-    assert not res.success and "no path" in res.message
+    assert not res.success and "no path" in res.message and res.outcome == Outcome.NO_PATH
+    with pytest.raises(ParameterError, match="seed"):
+        plan(world, (0, 0), (3, 3), seed=-1)
+    with pytest.raises(ParameterError, match="stop"):
+        plan(world, (0, 0), (3, 3), stop=5)
     with pytest.raises(UnreachableError, match="goal"):
         plan(world, (0, 0), (4, 3))
     with pytest.raises(UnreachableError, match="start"):
@@ -95,8 +100,8 @@ def test_compare_with_grid_reports_both():
     occ[0, 0] = occ[19, 19] = False
     rows = compare_with_grid(GridWorld(occ), (0, 0), (19, 19), repeats=1)
     assert set(rows) == {"quadtree", "grid"}
-    if rows["grid"]["success"]:
-        assert rows["quadtree"]["nodes"] < rows["grid"]["nodes"]
+    assert rows["grid"]["success"] and rows["quadtree"]["success"]
+    assert rows["quadtree"]["nodes"] < rows["grid"]["nodes"] == int((~occ).sum())
 
 
 @st.composite
@@ -129,6 +134,61 @@ def test_quadtree_finds_a_path_iff_the_grid_planner_does(case):
         assert ours.path[0].tolist() == list(start) and ours.path[-1].tolist() == list(goal)
         assert ours.length <= ours.info["raw_length"] + 1e-9
         assert ours.length >= np.hypot(goal[0] - start[0], goal[1] - start[1]) - 1e-9
+
+
+def _brute_segment_free(occ: np.ndarray, a: np.ndarray, b: np.ndarray) -> bool:
+    """Oracle of the closed-square rule with exact fractions: the segment is
+    blocked when it meets the closed square of a blocked or outside cell."""
+    from fractions import Fraction as F
+
+    h, w = occ.shape
+    x0, y0, x1, y1 = (F(float(v)) for v in (*a, *b))
+    for cy in range(-1, h + 1):
+        for cx in range(-1, w + 1):
+            if 0 <= cx < w and 0 <= cy < h and not occ[cy, cx]:
+                continue
+            t0, t1 = F(0), F(1)
+            ok = True
+            for p, q in ((x0 - x1, x0 - (cx - F(1, 2))), (x1 - x0, cx + F(1, 2) - x0),
+                         (y0 - y1, y0 - (cy - F(1, 2))), (y1 - y0, cy + F(1, 2) - y0)):
+                if p == 0:
+                    ok &= q >= 0
+                elif p < 0:
+                    t0 = max(t0, q / p)
+                else:
+                    t1 = min(t1, q / p)
+            if ok and t0 <= t1:
+                return False
+    return True
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_maps(), st.integers(0, 2**31 - 1))
+def test_tree_segment_check_is_the_grid_rule(case, seed):
+    """One line-of-sight rule: the quadtree query equals the grid family's
+    exact kernel between cell centres, and an exact-fraction oracle anywhere."""
+    from subtask_opt.planners.grid._kernels import segment_hits
+
+    occ, start, goal = case
+    tree = decompose(occ)
+    h, w = occ.shape
+    assert tree.segment_free(start, goal) == (
+        segment_hits(occ, start[0], start[1], goal[0], goal[1], True) == 0)
+    rng = np.random.default_rng(seed)
+    a = rng.uniform(-0.4, [w - 0.6, h - 0.6])
+    b = rng.uniform(-0.4, [w - 0.6, h - 0.6])
+    if rng.random() < 0.3:  # half-integers: segments grazing cell corners
+        a, b = np.round(a * 2) / 2, np.round(b * 2) / 2
+    assert tree.segment_free(a, b) == _brute_segment_free(occ, a, b)
+
+
+def test_tree_segment_check_grazing_a_corner_is_blocked():
+    occ = np.zeros((3, 3), dtype=bool)
+    occ[0, 1] = True
+    tree = decompose(occ)
+    assert not tree.segment_free((0, 0), (1, 1))  # touches the corner (0.5, 0.5)
+    assert tree.segment_free((0, 1), (2, 1))      # half a cell below the block's edge
+    assert not tree.segment_free((0, 0.5), (2, 0.5))  # runs along the block's edge
 
 
 def test_the_independent_check_sees_a_crossing():

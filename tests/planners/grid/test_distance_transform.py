@@ -1,6 +1,7 @@
-"""Distance transforms (chamfer 3/4, octile) and the any-angle MDT against
-independent oracles: raster-sweep Jarvis, scipy Dijkstra, brute-force
-line-of-sight Dijkstra."""
+"""Distance transforms (chamfer 3/4 with and without corner cutting, octile)
+and the any-angle MDT (exact and level fill) against independent oracles:
+raster-sweep Jarvis, scipy Dijkstra, brute-force line-of-sight Dijkstra, the
+thesis' level fill in plain Python."""
 
 from __future__ import annotations
 
@@ -17,10 +18,21 @@ from subtask_opt.planners.grid.world import GridWorld
 from tests.planners.grid.test_grid_oracles import (
     anyangle_oracle,
     chamfer_oracle,
+    levels_oracle,
     los_free,
     octile_oracle,
     path_free,
+    path_violations,
 )
+
+PLANS = {  # name -> (plan function, params, metric, corner cutting, fill)
+    "dt": (dt.plan_dt, None, "chamfer34", True, "exact"),
+    "dt-nocut": (dt.plan_dt, dt.DTParams("chamfer34", corner_cutting=False), "chamfer34", False,
+                 "exact"),
+    "dt-octile": (dt.plan_octile, None, "octile", False, "exact"),
+    "mdt": (dt.plan_mdt, None, "anyangle", None, "exact"),
+    "mdt-levels": (dt.plan_mdt, dt.MDTParams("levels"), "anyangle", None, "levels"),
+}
 
 
 @st.composite
@@ -49,12 +61,20 @@ def test_fields_equal_oracles(case):
     occ, start, goal = case
     world = GridWorld(occ)
     assert _close(dt.distance_field(world, goal, "octile"), octile_oracle(occ, goal))
-    assert _close(dt.distance_field(world, goal, "chamfer34"), chamfer_oracle(occ, goal))
+    assert _close(dt.distance_field(world, goal, "chamfer34", corner_cutting=False),
+                  chamfer_oracle(occ, goal))
+    assert _close(dt.distance_field(world, goal, "chamfer34"),
+                  chamfer_oracle(occ, goal, corner_cutting=True))
     mdt = dt.distance_field(world, goal, "anyangle")
     assert _close(mdt, anyangle_oracle(occ, goal))
-    # the MDT is never longer than the 8-connected transforms
+    levels = dt.distance_field(world, goal, "anyangle", fill="levels")
+    assert _close(levels, levels_oracle(occ, goal))
+    # the exact MDT is never longer than the level fill or the non-cutting transforms
     octile = dt.distance_field(world, goal, "octile")
-    assert np.all(mdt[np.isfinite(octile)] <= octile[np.isfinite(octile)] + 1e-9)
+    reach = np.isfinite(octile)
+    assert np.array_equal(np.isfinite(levels), np.isfinite(mdt))
+    assert np.all(mdt[reach] <= octile[reach] + 1e-9)
+    assert np.all(mdt[np.isfinite(mdt)] <= levels[np.isfinite(mdt)] + 1e-9)
 
 
 @settings(max_examples=40, deadline=None)
@@ -62,23 +82,28 @@ def test_fields_equal_oracles(case):
 def test_paths_realise_field_values(case):
     occ, start, goal = case
     world = GridWorld(occ)
-    for metric in ("octile", "anyangle", "chamfer34"):
-        res = dt.plan(world, start, goal, params=dt.DTParams(metric))
-        value = dt.distance_field(world, goal, metric)[start[1], start[0]]
-        assert res.success == np.isfinite(value)
+    for name, (fn, params, metric, cut, fill) in PLANS.items():
+        res = fn(world, start, goal, params=params)
+        field = dt.distance_field(world, goal, metric, corner_cutting=cut, fill=fill)
+        value = field[start[1], start[0]]
+        assert res.success == np.isfinite(value), name
         if not res.success:
-            assert "not reachable" in res.message and res.path.shape == (0, 2)
+            assert res.outcome == "no_path" and res.path.shape == (0, 2)
+            assert "not reachable" in res.message
             continue
         assert tuple(res.path[0]) == start and tuple(res.path[-1]) == goal
-        assert path_free(occ, res.path)
-        if len(res.path) == 1:
-            assert start == goal and value == 0.0
-        elif metric == "chamfer34":
+        assert path_violations(occ, res.path) == [], name
+        if not cut:
+            assert path_free(occ, res.path), name  # the closed-square rule
+        if metric == "chamfer34":
             steps = np.abs(np.diff(res.path, axis=0))
-            assert steps.max() <= 1  # 8-connected moves
-            assert np.isclose(np.sum(np.where(steps.sum(1) == 2, 4, 3)) / 3, value)
-        else:
+            assert steps.max(initial=0) <= 1  # 8-connected moves
+            assert np.isclose(np.sum(np.where(steps.sum(1) == 2, 4, 3)) / 3 if len(steps)
+                              else 0.0, value)
+        elif fill == "exact":
             assert np.isclose(res.length, value)
+        else:  # the least-visible walk jumps to values at most the fill's
+            assert res.length <= value + 1e-9
 
 
 @settings(max_examples=60, deadline=None)
@@ -99,10 +124,10 @@ def test_thesis_maps_mdt_exact_and_not_longer_than_dt():
         occ = case.world.occupancy
         mdt = dt.distance_field(case.world, case.goal, "anyangle")
         assert _close(mdt, anyangle_oracle(occ, case.goal)), name
-        r_mdt = dt.plan(case.world, case.start, case.goal, params=dt.DTParams("anyangle"))
-        for metric in ("chamfer34", "octile"):
-            r_dt = dt.plan(case.world, case.start, case.goal, params=dt.DTParams(metric))
-            assert r_mdt.length <= r_dt.length + 1e-9, (name, metric)
+        r_mdt = dt.plan_mdt(case.world, case.start, case.goal)
+        for params in (dt.DTParams("chamfer34", corner_cutting=False), dt.DTParams("octile")):
+            r_dt = dt.plan(case.world, case.start, case.goal, params=params)
+            assert r_mdt.length <= r_dt.length + 1e-9, (name, params)
 
 
 def test_field_reused_for_many_starts_and_stop_at():
@@ -125,22 +150,56 @@ def test_no_path_is_a_result_not_an_error():
         .#.#.
         .###.
     """)
-    for metric in dt.METRICS:
-        res = dt.plan(world, (0, 0), (2, 2), params=dt.DTParams(metric))
-        assert not res.success and "not reachable" in res.message
-        assert res.length == float("inf")
+    for name, (fn, params, *_rest) in PLANS.items():
+        res = fn(world, (0, 0), (2, 2), params=params)
+        assert not res.success and "not reachable" in res.message, name
+        assert res.outcome == "no_path" and res.length == float("inf")
 
 
-def test_start_equals_goal():
+def test_corner_gap_is_never_passed():
+    gap = GridWorld.from_ascii("@.\n.@")  # start bottom-left, goal top-right
+    for name, (fn, params, *_rest) in PLANS.items():
+        res = fn(gap, (0, 1), (1, 0), params=params)
+        assert not res.success and res.outcome == "no_path", name
+
+
+def test_corner_cutting_default_and_option():
+    one = GridWorld.from_ascii(".@\n..")
+    assert dt.plan_dt(one, (0, 0), (1, 1)).path.shape == (2, 2)  # one diagonal past the corner
+    nocut = dt.plan_dt(one, (0, 0), (1, 1), params=dt.DTParams(corner_cutting=False))
+    assert nocut.path.tolist() == [[0, 0], [0, 1], [1, 1]]
+    assert dt.plan_octile(one, (0, 0), (1, 1)).path.shape == (3, 2)
+    assert dt.DTParams("octile", corner_cutting=True).cuts_corners
+
+
+def test_level_fill_on_the_cluttered_map():
+    case = thesis_case("cluttered")
+    exact = dt.distance_field(case.world, case.goal, "anyangle")
+    levels = dt.distance_field(case.world, case.goal, "anyangle", fill="levels")
+    assert _close(levels, levels_oracle(case.world.occupancy, case.goal))
+    assert np.all(exact[np.isfinite(exact)] <= levels[np.isfinite(exact)] + 1e-9)
+
+
+@pytest.mark.parametrize("name", list(PLANS))
+def test_start_equals_goal(name):
+    fn, params, *_ = PLANS[name]
     world = GridWorld.from_ascii("...")
-    res = dt.plan(world, (1, 0), (1, 0), params=dt.DTParams("anyangle"))
-    assert res.success and res.length == 0.0
+    res = fn(world, (1, 0), (1, 0), params=params)
+    assert res.success and res.length == 0.0 and res.path.tolist() == [[1.0, 0.0]]
 
 
 def test_bad_inputs():
     world = GridWorld.from_ascii("..#")
     with pytest.raises(ParameterError, match="metric"):
         dt.DTParams("manhattan")
+    with pytest.raises(ParameterError, match="metric"):
+        dt.DTParams("anyangle")
+    with pytest.raises(ParameterError, match="corner_cutting"):
+        dt.DTParams(corner_cutting=1)
+    with pytest.raises(ParameterError, match="fill"):
+        dt.MDTParams("bfs")
+    with pytest.raises(ParameterError, match="metric"):
+        dt.distance_field(world, (0, 0), "manhattan")
     with pytest.raises(UnreachableError, match="goal"):
         dt.distance_field(world, (2, 0))
     with pytest.raises(UnreachableError, match="start"):
@@ -148,8 +207,12 @@ def test_bad_inputs():
     with pytest.raises(ParameterError, match="shape"):
         dt.path_from_field(world, np.zeros((2, 2)), (0, 0))
     with pytest.raises(ParameterError, match="max_free_cells=1"):
-        dt.plan(world, (0, 0), (1, 0), params=dt.DTParams("anyangle", max_free_cells=1))
+        dt.plan_mdt(world, (0, 0), (1, 0), params=dt.MDTParams(max_free_cells=1))
     with pytest.raises(ParameterError, match="max_free_cells"):
-        dt.DTParams(max_free_cells=0)
+        dt.MDTParams(max_free_cells=0)
     with pytest.raises(ParameterError, match="stop_at"):
         dt.distance_field(world, (0, 0), "anyangle", stop_at=[(1, 0)])
+    with pytest.raises(ParameterError, match="dt-octile"):
+        dt.plan_dt(world, (0, 0), (1, 0), params=dt.DTParams("octile"))
+    with pytest.raises(ParameterError, match="use dt"):
+        dt.plan_octile(world, (0, 0), (1, 0), params=dt.DTParams("chamfer34"))

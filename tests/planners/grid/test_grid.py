@@ -1,4 +1,5 @@
-"""GridWorld: construction from text, arrays, PNG and MovingAI files; validation."""
+"""GridWorld: construction from text, arrays, PNG and MovingAI files; reading a
+file by content; size limits; validation."""
 
 from __future__ import annotations
 
@@ -7,8 +8,15 @@ import pytest
 from PIL import Image
 
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
-from subtask_opt.planners.grid.maps import MAP_NAMES, THESIS_CELL_SIZE, THESIS_MAPS, thesis_case
-from subtask_opt.planners.grid.world import GridWorld
+from subtask_opt.planners.grid import world as world_module
+from subtask_opt.planners.grid.maps import (
+    MAP_NAMES,
+    THESIS_CELL_SIZE,
+    THESIS_MAPS,
+    UNBORDERED,
+    thesis_case,
+)
+from subtask_opt.planners.grid.world import MAX_SIDE, GridWorld, read_grid
 
 
 def test_from_ascii_characters_and_indexing():
@@ -124,20 +132,71 @@ def test_from_movingai_missing_file(tmp_path):
 
 
 def test_thesis_maps_shape_border_and_difficulty():
-    from subtask_opt.planners.grid.distance_transform import DTParams, plan
+    from subtask_opt.planners.grid.distance_transform import plan_mdt
 
     lengths = []
     for name in MAP_NAMES:
         case = thesis_case(name)
         w = case.world
-        assert (w.width, w.height) == (16, 11) and w.cell_size == THESIS_CELL_SIZE
-        assert w.occupancy[0].all() and w.occupancy[-1].all()
+        bordered = name not in UNBORDERED
+        assert case.border == int(bordered)
+        assert (w.width, w.height) == ((16, 11) if bordered else (14, 9))
+        assert w.cell_size == THESIS_CELL_SIZE
         assert w.is_free(*case.start) and w.is_free(*case.goal)
+        if bordered:
+            assert w.occupancy[0].all() and w.occupancy[-1].all()
         raw = thesis_case(name, border=False)
         assert (raw.world.width, raw.world.height) == (14, 9)
+        assert np.array_equal(raw.world.occupancy, w.occupancy[case.border:w.height - case.border,
+                                                               case.border:w.width - case.border])
         if name in THESIS_MAPS:
-            lengths.append(plan(w, case.start, case.goal, params=DTParams("anyangle")).length)
+            lengths.append(plan_mdt(w, case.start, case.goal).length)
     # rising difficulty: the cluttered map is the longest detour
     assert lengths[-1] == max(lengths)
     with pytest.raises(ParameterError, match="unknown map 'nope'"):
         thesis_case("nope")
+
+
+def test_read_grid_decides_by_content(tmp_path, movingai_dir):
+    img = np.full((2, 3), 255, dtype=np.uint8)
+    img[0, 1] = 0
+    Image.fromarray(img).save(tmp_path / "image.txt", format="PNG")  # a PNG, any suffix
+    (tmp_path / "ascii.map").write_text("..#\n...\n")  # ASCII whatever the suffix
+    (tmp_path / "movingai.png").write_text("type octile\nheight 1\nwidth 2\nmap\n.@\n")
+    assert read_grid(tmp_path / "image.txt").occupancy.tolist() == [[False, True, False],
+                                                                     [False, False, False]]
+    assert read_grid(tmp_path / "ascii.map").occupancy.tolist() == [[False, False, True],
+                                                                     [False, False, False]]
+    assert read_grid(tmp_path / "movingai.png").occupancy.tolist() == [[False, True]]
+    real = read_grid(movingai_dir / "maps" / "arena.map")
+    assert np.array_equal(real.occupancy,
+                          GridWorld.from_movingai(movingai_dir / "maps" / "arena.map").occupancy)
+
+
+@pytest.mark.parametrize("data, match", [
+    (b"\xff\xfe\x00garbage", "not a text file"),
+    (b"\x89PNG\r\n\x1a\nbroken", "cannot read image"),
+    (b"", "empty"),
+    (b"type octile\nheight 99999\nwidth 2\nmap\n", "over the limit"),
+    (b"..\n.x\n", "unknown map character 'x'"),
+])
+def test_read_grid_bad_content(tmp_path, data, match):
+    f = tmp_path / "bad"
+    f.write_bytes(data)
+    with pytest.raises(InputDataError, match=match):
+        read_grid(f)
+
+
+def test_size_limits(tmp_path, monkeypatch):
+    wide = "." * (MAX_SIDE + 1)
+    with pytest.raises(InputDataError, match=f"{MAX_SIDE}x{MAX_SIDE}"):
+        GridWorld.from_ascii(wide)
+    img = np.full((1, 9), 255, dtype=np.uint8)
+    Image.fromarray(img).save(tmp_path / "wide.png")
+    monkeypatch.setattr(world_module, "MAX_SIDE", 8)
+    with pytest.raises(InputDataError, match="9x1 grid is over the limit"):
+        GridWorld.from_png(tmp_path / "wide.png")
+    monkeypatch.setattr(world_module, "MAX_FILE_BYTES", 10)
+    (tmp_path / "big.txt").write_text("." * 11)
+    with pytest.raises(InputDataError, match="11 bytes, more than the limit"):
+        read_grid(tmp_path / "big.txt")

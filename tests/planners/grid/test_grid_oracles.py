@@ -3,12 +3,15 @@
 Line of sight by Liang-Barsky clipping against each blocked cell's closed
 square, in floats: the touching cases (t_enter == t_exit) compare equal
 rationals with small denominators, and IEEE division is correctly rounded,
-so the comparisons are exact. Shortest paths by scipy's Dijkstra.
+so the comparisons are exact. Shortest paths by scipy's Dijkstra. The
+"never through a blocked cell or a corner gap" rule by an exact supercover
+walk in rational numbers (:func:`path_violations`).
 """
 
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -88,9 +91,10 @@ def octile_oracle(occ: np.ndarray, goal) -> np.ndarray:
     return d
 
 
-def chamfer_oracle(occ: np.ndarray, goal) -> np.ndarray:
+def chamfer_oracle(occ: np.ndarray, goal, corner_cutting: bool = False) -> np.ndarray:
     """Jarvis' transform as the thesis describes it: raster sweeps with 3/4
-    weights, repeated until nothing changes (result in cells, value / 3)."""
+    weights, repeated until nothing changes (result in cells, value / 3).
+    ``corner_cutting``: a diagonal may pass one blocked side cell, not two."""
     h, w = occ.shape
     big = 10**9
     d = np.full((h, w), big, dtype=np.int64)
@@ -110,7 +114,10 @@ def chamfer_oracle(occ: np.ndarray, goal) -> np.ndarray:
                             nx, ny = x + dx, y + dy
                             if (dx, dy) == (0, 0) or not (0 <= nx < w and 0 <= ny < h):
                                 continue
-                            if occ[ny, nx] or (dx and dy and (occ[y, nx] or occ[ny, x])):
+                            if occ[ny, nx]:
+                                continue
+                            sides = int(occ[y, nx]) + int(occ[ny, x]) if dx and dy else 0
+                            if sides == 2 or (sides == 1 and not corner_cutting):
                                 continue
                             v = d[ny, nx] + (4 if dx and dy else 3)
                             if v < d[y, x]:
@@ -143,6 +150,101 @@ def anyangle_oracle(occ: np.ndarray, goal) -> np.ndarray:
     return out
 
 
+def levels_oracle(occ: np.ndarray, goal) -> np.ndarray:
+    """The thesis' MDT fill as printed (section 2.2.4), in plain Python: level 1
+    = cells that see the goal, level k + 1 = empty cells that see a level-k cell,
+    value = the least (level-k value + segment length); filled cells stay."""
+    h, w = occ.shape
+    free = [(x, y) for y in range(h) for x in range(w) if not occ[y, x]]
+    value = {tuple(goal): 0.0}
+    frontier = [tuple(goal)]
+    while frontier:
+        new = {}
+        for c in free:
+            if c in value:
+                continue
+            cands = [value[f] + math.hypot(c[0] - f[0], c[1] - f[1])
+                     for f in frontier if los_free(occ, f, c)]
+            if cands:
+                new[c] = min(cands)
+        value.update(new)
+        frontier = list(new)
+    out = np.full((h, w), np.inf)
+    for (x, y), v in value.items():
+        out[y, x] = v
+    return out
+
+
+def _blocked(occ: np.ndarray, x: int, y: int) -> bool:
+    h, w = occ.shape
+    return not (0 <= x < w and 0 <= y < h) or bool(occ[y, x])
+
+
+def _cells_at(v: Fraction) -> list[int]:
+    """Cell indices whose closed interval [i - 1/2, i + 1/2] holds v."""
+    lo = math.ceil(v - Fraction(1, 2))
+    hi = math.floor(v + Fraction(1, 2))
+    return list(range(lo, hi + 1))
+
+
+def segment_violations(occ: np.ndarray, p, q) -> list[str]:
+    """Where the straight move p -> q enters a blocked cell or passes between
+    two blocked cells that touch at a corner (exact, in rationals).
+
+    The move is split at every cell border it crosses; the middle of each
+    piece must lie in a free cell (on a border: in at least one free cell).
+    Where it crosses a cell corner diagonally, the two cells beside that
+    corner must not both be blocked. Cells outside the grid are blocked.
+    """
+    p = [Fraction(float(v)) for v in p]
+    q = [Fraction(float(v)) for v in q]
+    d = [q[0] - p[0], q[1] - p[1]]
+    ts = {Fraction(0), Fraction(1)}
+    crossings: dict[Fraction, int] = {}
+    for axis in range(2):
+        if d[axis] == 0:
+            continue
+        lo, hi = sorted((p[axis], q[axis]))
+        k = math.ceil(lo - Fraction(1, 2))
+        while k + Fraction(1, 2) <= hi:
+            t = (k + Fraction(1, 2) - p[axis]) / d[axis]
+            if 0 < t < 1:
+                ts.add(t)
+                crossings[t] = crossings.get(t, 0) + 1
+            k += 1
+    out = []
+    order = sorted(ts)
+    for t0, t1 in zip(order[:-1], order[1:], strict=True):
+        m = [p[a] + (t0 + t1) / 2 * d[a] for a in range(2)]
+        cells = [(x, y) for x in _cells_at(m[0]) for y in _cells_at(m[1])]
+        if all(_blocked(occ, x, y) for x, y in cells):
+            out.append(f"enters blocked cell(s) {cells} at {[float(v) for v in m]}")
+    for t, n in crossings.items():
+        if n == 2:  # through a corner, diagonally
+            c = [p[a] + t * d[a] for a in range(2)]
+            a, b = int(c[0] - Fraction(1, 2)), int(c[1] - Fraction(1, 2))
+            if (d[0] > 0) == (d[1] > 0):
+                others = [(a + 1, b), (a, b + 1)]
+            else:
+                others = [(a, b), (a + 1, b + 1)]
+            if all(_blocked(occ, x, y) for x, y in others):
+                out.append(f"passes the corner gap at {[float(v) for v in c]} between {others}")
+    return out
+
+
+def path_violations(occ: np.ndarray, path) -> list[str]:
+    """:func:`segment_violations` of every segment of a polyline (a single
+    point: whether its cell is free)."""
+    pts = [tuple(map(float, pt)) for pt in path]
+    if len(pts) == 1:
+        x, y = (round(v) for v in pts[0])
+        return [f"point {pts[0]} is in a blocked cell"] if _blocked(occ, x, y) else []
+    out = []
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        out.extend(segment_violations(occ, a, b))
+    return out
+
+
 # -- tests of the oracles themselves ------------------------------------------------
 def test_box_touch_cases():
     box = ((0.5, -0.5), (1.5, 0.5))
@@ -157,3 +259,26 @@ def test_oracles_agree_on_open_grid():
     assert d8[3, 4] == pytest.approx(math.sqrt(2) * 3 + 1)
     assert chamfer_oracle(occ, (0, 0))[3, 4] == (4 * 3 + 3) / 3
     assert anyangle_oracle(occ, (0, 0))[3, 4] == 5.0
+
+
+def test_violation_walk_cases():
+    gap = np.array([[False, True], [True, False]])  # ".@" / "@."
+    assert path_violations(gap, [(0, 0), (1, 1)])  # through the corner gap
+    one = np.array([[False, True], [False, False]])
+    assert path_violations(one, [(0, 0), (1, 1)]) == []  # passes one corner: allowed
+    assert path_violations(one, [(0, 0), (1, 0)])  # into the blocked cell
+    wall = np.zeros((3, 3), bool)
+    wall[1, 1] = True
+    assert path_violations(wall, [(0, 0), (2, 0), (2, 2)]) == []
+    assert path_violations(wall, [(0, 0), (2, 2)])  # through the centre
+    assert path_violations(wall, [(0.0, 0.5), (2.0, 0.5)]) == []  # along its border
+    assert path_violations(wall, [(0, 0), (-1, 0)])  # off the grid
+
+
+def test_corner_cutting_oracle():
+    occ = np.array([[False, True], [False, False]])
+    assert chamfer_oracle(occ, (0, 1))[0, 0] == 1.0
+    assert chamfer_oracle(occ, (1, 1))[0, 0] == 2.0  # around the corner
+    assert chamfer_oracle(occ, (1, 1), corner_cutting=True)[0, 0] == 4 / 3  # one diagonal
+    gap = np.array([[False, True], [True, False]])
+    assert chamfer_oracle(gap, (0, 0), corner_cutting=True)[1, 1] == np.inf

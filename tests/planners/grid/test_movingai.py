@@ -1,4 +1,5 @@
-"""Octile distance transform against every row of the MovingAI scenario files."""
+"""Octile distance transform against every row of the MovingAI scenario files
+(the small arena map in the unit suite, every map under ``-m bench``)."""
 
 from __future__ import annotations
 
@@ -18,7 +19,8 @@ def _load(movingai_dir, name):
     return world, scen
 
 
-@pytest.mark.parametrize("name", MAPS)
+@pytest.mark.parametrize("name", [
+    "arena", *(pytest.param(n, marks=pytest.mark.bench) for n in MAPS if n != "arena")])
 def test_every_row_matches_optimum(movingai_dir, name):
     world, scen = _load(movingai_dir, name)
     n_lines = sum(1 for ln in (movingai_dir / "scenarios" / f"{name}.map.scen")
@@ -34,6 +36,7 @@ def test_every_row_matches_optimum(movingai_dir, name):
     assert report.max_abs_error <= MISMATCH_TOL
 
 
+@pytest.mark.bench
 @pytest.mark.parametrize("name", ["8room_000", "random512-10-0"])
 def test_plain_and_focused_transforms_agree_on_a_sample(movingai_dir, name):
     world, scen = _load(movingai_dir, name)
@@ -60,12 +63,25 @@ def test_read_scenarios_columns(movingai_dir):
     ("version 1\n0\tm\t4\t4\t0\t0\t1\n", "expected 9 columns"),
     ("version 1\n0\tm\t4\t4\t0\t0\t1\tx\t2\n", "not a number"),
     ("version 1\n0\tm\t4\t4\t0\t0\t1\t1\t-2\n", ">= 0"),
+    ("version 1\n0\tm\t4\t4\t0\t0\t1\t1\tnan\n", ">= 0"),
+    ("version 1\n0\tm\t99999\t4\t0\t0\t1\t1\t2\n", "not within"),
+    ("version 1\n0\tm\t4\t4\t0\t0\t9\t1\t2\n", "outside the 4x4 map"),
+    ("version 1\n-1\tm\t4\t4\t0\t0\t1\t1\t2\n", "bucket"),
+    ("version 1\n0\tm\t4\t4\t0\t0\t99999999999999999999999\t1\t2\n", "outside"),
 ])
 def test_malformed_scenarios(tmp_path, text, match):
     f = tmp_path / "s.scen"
     f.write_text(text)
     with pytest.raises(InputDataError, match=match):
         read_scenarios(f)
+
+
+def test_unreadable_scenarios(tmp_path):
+    with pytest.raises(InputDataError, match="cannot read scenario"):
+        read_scenarios(tmp_path / "missing.scen")
+    (tmp_path / "bin.scen").write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(InputDataError, match="not a text file"):
+        read_scenarios(tmp_path / "bin.scen")
 
 
 def test_scenario_map_mismatch_and_blocked_rows(tmp_path):
@@ -79,5 +95,6 @@ def test_scenario_map_mismatch_and_blocked_rows(tmp_path):
         bench(world, read_scenarios(f))
     f.write_text("version 1\n0\tm\t3\t3\t0\t0\t2\t2\t4\n0\tm\t3\t3\t0\t1\t2\t1\t4\n")
     report = bench(world, read_scenarios(f))
+    assert np.array_equal(bench(world, read_scenarios(f), focused=True).ours, report.ours)
     # around the centre block: no corner cutting, so no diagonal step at all
     assert report.mismatches == 0 and report.ours.tolist() == [4.0, 4.0]

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 from scipy.sparse.csgraph import shortest_path
 
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
+from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.planners.polygon import maklink, visibility
 from subtask_opt.planners.polygon.world import PolygonWorld
 from tests.planners.polygon.test_world import (
@@ -99,8 +100,8 @@ def _hull_area(pts) -> float:
 
 @pytest.mark.parametrize("start, goal", [((20, 20), (320, 320)), ((10, 340), (340, 10))])
 def test_seed003_routes(seed003, graph003, start, goal):
-    d = maklink.plan(seed003, start, goal)
-    i = maklink.plan(seed003, start, goal, params=maklink.MaklinkParams(improve=True))
+    d = maklink.dijkstra(seed003, start, goal)
+    i = maklink.improved_dijkstra(seed003, start, goal)
     opt = visibility.plan(seed003, start, goal).length
     assert d.success and i.success
     assert opt - 1e-9 <= i.length <= d.length
@@ -146,7 +147,7 @@ def test_empty_world_is_one_cell():
     w = PolygonWorld((0, 0, 10, 5), ())
     g = maklink.build_graph(w)
     assert g.n_links == 0 and len(g.cells) == 1
-    res = maklink.plan(w, (1, 1), (9, 4))
+    res = maklink.dijkstra(w, (1, 1), (9, 4))
     assert res.success and len(res.path) == 2
 
 
@@ -156,7 +157,7 @@ def test_obstacle_touching_the_boundary():
     g = maklink.build_graph(w)
     check_graph_invariants(w, g)
     for start, goal in (((1, 1), (9, 1)), ((1, 9), (9, 9))):
-        res = maklink.plan(w, start, goal, params=maklink.MaklinkParams(improve=True))
+        res = maklink.improved_dijkstra(w, start, goal)
         assert res.success and path_is_free_convex(res.path, w)
         # no slipping through the zero-width gap at the wall
         assert not any(np.allclose(p, (4, 0)) or p[1] >= 10 - 1e-9 for p in res.path[1:-1])
@@ -165,16 +166,21 @@ def test_obstacle_touching_the_boundary():
 
 def test_separated_world_has_no_route():
     wall = PolygonWorld((0, 0, 10, 10), ([[0, 4], [10, 4], [10, 6], [0, 6]],))
-    res = maklink.plan(wall, (5, 2), (5, 8))
+    res = maklink.dijkstra(wall, (5, 2), (5, 8))
     assert not res.success and "no collision-free path" in res.message
     assert res.path.shape == (0, 2)
 
 
 def test_bad_input(seed003):
     with pytest.raises(UnreachableError, match=r"goal \(50, 200\) is inside obstacle 0"):
-        maklink.plan(seed003, (20, 20), (50, 200))
-    with pytest.raises(ParameterError, match="improve"):
-        maklink.MaklinkParams(improve=1)  # type: ignore[arg-type]
+        maklink.dijkstra(seed003, (20, 20), (50, 200))
+    for fn, name in ((maklink.dijkstra, "dijkstra"), (maklink.improved_dijkstra, "improved")):
+        with pytest.raises(ParameterError, match=f"{name} is deterministic and takes no seed"):
+            fn(seed003, (20, 20), (320, 320), seed=0)
+        with pytest.raises(ParameterError, match=f"{name} is not iterative"):
+            fn(seed003, (20, 20), (320, 320), stop=MaxGenerations(5))
+        with pytest.raises(ParameterError, match=f"{name} params must be None"):
+            fn(seed003, (20, 20), (320, 320), params={"improve": True})
 
 
 def test_shortcut_is_free_and_not_longer(seed003):
@@ -194,8 +200,8 @@ def test_random_worlds(data):
     graph = maklink.build_graph(world)
     check_graph_invariants(world, graph)
     start, goal = free_point(data.draw, world), free_point(data.draw, world)
-    d = maklink.plan(world, start, goal)
-    i = maklink.plan(world, start, goal, params=maklink.MaklinkParams(improve=True))
+    d = maklink.dijkstra(world, start, goal)
+    i = maklink.improved_dijkstra(world, start, goal)
     assert d.success and i.success
     assert path_is_free_convex(d.path, world) and path_is_free_convex(i.path, world)
     assert visibility.plan(world, start, goal).length - 1e-9 <= i.length <= d.length + 1e-9

@@ -25,8 +25,8 @@ from tests.planners.polygon.test_world import convex_worlds, free_point, path_is
 def test_acceptance_on_seed003(seed003, start, goal, stated):
     opt = oracle_length(seed003, start, goal)
     assert round(opt, 4) == stated
-    dij = maklink.plan(seed003, start, goal)
-    imp = maklink.plan(seed003, start, goal, params=maklink.MaklinkParams(improve=True))
+    dij = maklink.dijkstra(seed003, start, goal)
+    imp = maklink.improved_dijkstra(seed003, start, goal)
     res = pso.plan(seed003, start, goal, seed=0)
     assert res.success and res.planner == "pso"
     assert imp.length <= dij.length

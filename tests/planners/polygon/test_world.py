@@ -162,7 +162,8 @@ SQUARE = [[1, 1], [2, 1], [2, 2], [1, 2]]
     ("abcd", (), "numbers"),
     ((0, 0, 3, 3), ([[1, 1], [2, 2]],), "obstacle 0 needs at least 3"),
     ((0, 0, 3, 3), ([[1, 1], [2, 2], [3, 3]],), "obstacle 0 is degenerate"),
-    ((0, 0, 3, 3), (SQUARE, [[0, 0], [1, 0], [0.5, float("inf")]]), "obstacle 1 has a non-finite"),
+    ((0, 0, 3, 3), (SQUARE, [[0, 0], [1, 0], [0.5, float("inf")]]),
+     "obstacle 1 vertex 2 must be two finite numbers"),
     ((0, 0, 3, 3), ([[0, 0], [2, 2], [2, 0], [0, 3]],), "obstacle 0 is not a simple"),
     ((0, 0, 3, 3), ([[0, 0], [2, 0], [2, 2], [2, 1]],), "obstacle 0 is not a simple"),
     ((0, 0, 3, 3), ([[0.5, 0.5], [1, 0.5], [1, 0.5], [0.5, 1]],), "obstacle 0 is not a simple"),
@@ -171,8 +172,13 @@ SQUARE = [[1, 1], [2, 1], [2, 2], [1, 2]]
     ((0, 0, 3, 3), (SQUARE, [[2, 1], [3, 1], [3, 2]]), "obstacles 0 and 1 overlap or touch"),
     ((0, 0, 9, 9), ([[1, 1], [8, 1], [8, 8], [1, 8]], [[3, 3], [4, 3], [4, 4]]),
      "obstacles 0 and 1 overlap"),
-    ((0, 0, 3, 3), ([[1, 1], [2, 1], ["a", 2]],), "obstacle 0 must be"),
-    ((0, 0, 3, 3), ([1, 2, 3],), "obstacle 0 must be a"),
+    ((0, 0, 3, 3), ([[1, 1], [2, 1], ["a", 2]],), "obstacle 0 vertex 2 must be two finite"),
+    ((0, 0, 3, 3), ([[1, 1], [2, 1], ["2", "2"]],), "obstacle 0 vertex 2 must be two finite"),
+    ((0, 0, 3, 3), ([[1, 1], [2, 1], [True, 2]],), "obstacle 0 vertex 2 must be two finite"),
+    ((0, 0, 3, 3), ([[1, 1], [2, 1], [10**400, 2]],), "obstacle 0 vertex 2 must be two finite"),
+    ((0, 0, 3, 3), ([1, 2, 3],), "obstacle 0 vertex 0 must be a pair"),
+    ((0, 0, 3, 3), ("abc",), "obstacle 0 must be a list"),
+    (("0", 0, 3, 3), (), "four finite numbers"),
 ])
 def test_bad_worlds_raise(bounds, obstacles, match):
     with pytest.raises(InputDataError, match=match):

@@ -11,17 +11,22 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.base.geometry import wrap_angle
 from subtask_opt.planners.reactive.fuzzy import (
+    MAX_WEIGHT,
     FuzzyNavigator,
     FuzzyParams,
     fuzzy_decision,
     mu_clearance,
     mu_repulsion,
     mu_target,
+    reciprocal_matrix,
     repulsive_potential,
+    saaty_weights,
+    table1,
 )
 from subtask_opt.planners.reactive.sonar import SonarRing
-from subtask_opt.planners.reactive.unicycle import Unicycle, integrate_arc, wrap_angle
+from subtask_opt.planners.reactive.unicycle import Unicycle, integrate_arc
 
 # The paper's Table 1: seven candidates, three goals.
 TABLE1 = np.array([
@@ -46,6 +51,121 @@ def test_decision_respects_admissibility_and_breaks_ties_first():
     assert idx == 5          # next best muD = 0.25
     idx, _ = fuzzy_decision(np.array([[0.5, 0.6], [0.6, 0.5]]))
     assert idx == 0
+
+
+def test_table1_report_prints_the_papers_numbers_beside_ours():
+    report = table1()
+    assert report.matches and not report.weighted and report.choice == 4
+    np.testing.assert_array_equal(report.memberships, TABLE1)
+    assert report.paper_mu_d == tuple(TABLE1_D)
+    text = "\n".join(report.lines())
+    assert "muD paper" in text and "muD ours" in text and "matches the paper" in text
+    d = report.to_dict()
+    assert d["mu_d"] == TABLE1_D and d["paper_choice"] == 4 and d["matches"] is True
+
+
+def test_table1_with_weights_is_the_min_of_powered_memberships():
+    w = (2.0, 0.5, 1.0)
+    report = table1(w)
+    expected = [min(TABLE1[i, j] ** w[j] for j in range(3)) for i in range(7)]
+    np.testing.assert_allclose(report.mu_d, expected, rtol=1e-15)
+    assert report.weighted and report.choice == int(np.argmax(expected)) + 1
+    assert not report.matches          # G1 squared: candidate 4 gets 0.16, not 0.4
+
+
+_MEMBERSHIPS = st.lists(st.lists(st.floats(0.0, 1.0), min_size=3, max_size=3), min_size=1,
+                        max_size=12).map(np.array)
+
+
+@settings(max_examples=60, deadline=None)
+@given(mu=_MEMBERSHIPS)
+def test_unit_weights_are_the_plain_min(mu):
+    idx_plain, d_plain = fuzzy_decision(mu)
+    idx_w, d_w = fuzzy_decision(mu, weights=(1.0, 1.0, 1.0))
+    np.testing.assert_array_equal(d_w, d_plain)
+    assert idx_w == idx_plain
+    # the plain min, by brute force over candidates and goals
+    brute = [min(row) for row in mu.tolist()]
+    assert d_plain.tolist() == brute
+    assert idx_plain == brute.index(max(brute))
+
+
+@settings(max_examples=60, deadline=None)
+@given(mu=_MEMBERSHIPS, w=st.lists(st.floats(0.05, 20.0), min_size=3, max_size=3))
+def test_weighted_decision_is_the_min_of_powers(mu, w):
+    _, d = fuzzy_decision(mu, weights=w)
+    brute = [min(mu[i, j] ** w[j] for j in range(3)) for i in range(mu.shape[0])]
+    np.testing.assert_allclose(d, brute, rtol=1e-12, atol=0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(v=st.lists(st.floats(0.01, 100.0), min_size=1, max_size=7))
+def test_saaty_weights_of_a_consistent_matrix_are_its_eigenvector(v):
+    # a consistent matrix a_ij = v_i / v_j has rank 1: a v = m v, so its principal
+    # eigenvector is v itself; the weights are v scaled to sum to m
+    v = np.array(v)
+    m = v.size
+    w, ci = saaty_weights(v[:, None] / v[None, :])
+    np.testing.assert_allclose(w, m * v / v.sum(), rtol=1e-9)
+    assert math.isclose(w.sum(), m, rel_tol=1e-12)
+    assert ci == pytest.approx(0.0, abs=1e-9)
+
+
+def test_saaty_weights_of_equal_importance_are_ones_and_give_the_plain_min():
+    w, ci = saaty_weights(np.ones((3, 3)))
+    np.testing.assert_allclose(w, 1.0, rtol=1e-12)
+    assert ci == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(table1(w).mu_d, TABLE1_D, rtol=1e-12)
+
+
+def test_saaty_consistency_index_of_an_inconsistent_matrix():
+    # 3 > 1 > 3 > ... a cycle: lambda_max of [[1, k, 1/k], [1/k, 1, k], [k, 1/k, 1]] is
+    # 1 + k + 1/k (the eigenvector is all ones by symmetry of the cycle)
+    k = 3.0
+    a = np.array([[1, k, 1 / k], [1 / k, 1, k], [k, 1 / k, 1]])
+    w, ci = saaty_weights(a)
+    np.testing.assert_allclose(w, 1.0, rtol=1e-9)
+    assert ci == pytest.approx((1 + k + 1 / k - 3) / 2, rel=1e-9)
+
+
+def test_reciprocal_matrix_from_the_upper_triangle():
+    a = reciprocal_matrix([3.0, 5.0, 2.0])
+    np.testing.assert_allclose(a, [[1, 3, 5], [1 / 3, 1, 2], [1 / 5, 1 / 2, 1]])
+    with pytest.raises(InputDataError, match="m \\(m - 1\\) / 2"):
+        reciprocal_matrix([1.0, 2.0])
+    with pytest.raises(InputDataError, match="> 0"):
+        reciprocal_matrix([1.0, 0.0, 2.0])
+
+
+@pytest.mark.parametrize("bad, words", [
+    (np.ones((2, 3)), "square"), (np.array([[1.0, -2.0], [-0.5, 1.0]]), "> 0"),
+    (np.array([[1.0, 2.0], [2.0, 1.0]]), "reciprocal"), ("abc", "square"),
+    (np.array([[1.0, np.inf], [0.0, 1.0]]), "finite"), (np.zeros((0, 0)), "square"),
+])
+def test_saaty_rejects_bad_matrices(bad, words):
+    with pytest.raises(InputDataError, match=words):
+        saaty_weights(bad)
+
+
+@pytest.mark.parametrize("weights", [(1.0, 1.0), (0.0, 1.0, 1.0), (1.0, -2.0, 1.0),
+                                     (1.0, float("nan"), 1.0), (1.0, MAX_WEIGHT * 2, 1.0),
+                                     (True, 1.0, 1.0), ("1", 1.0, 1.0), 3.0])
+def test_bad_weights_raise(weights):
+    with pytest.raises(ParameterError, match="weights"):
+        FuzzyParams(weights=weights)
+    with pytest.raises(ParameterError, match="weights"):
+        table1(weights)
+
+
+def test_weights_change_the_navigators_choice_only_through_mu_d():
+    # equal weights: the decision equals the unweighted navigator's
+    pose, ranges, goal = np.zeros(3), np.full(18, 2.5), np.array([5.0, 1.0])
+    ranges[6:10] = 0.9
+    a = _nav().decide(pose, ranges, goal)
+    b = _nav(weights=(1.0, 1.0, 1.0)).decide(pose, ranges, goal)
+    assert (a.v, a.omega) == (b.v, b.omega)
+    c = _nav(weights=(4.0, 1.0, 1.0)).decide(pose, ranges, goal)
+    assert c.mu[3] == pytest.approx(min(c.mu[0] ** 4.0, c.mu[1], c.mu[2]))
 
 
 @pytest.mark.parametrize("bad", [np.zeros((0, 3)), np.array([0.1, 0.2]),
@@ -120,10 +240,16 @@ def test_commands_grid_and_limits():
 
 
 @pytest.mark.parametrize("field", ["max_speed", "max_turn_rate", "dt", "radius"])
-@pytest.mark.parametrize("value", [0.0, -1.0, float("nan")])
+@pytest.mark.parametrize("value", [0.0, -1.0, float("nan"), float("inf"), "1", 1j])
 def test_non_positive_robot_limits_raise(field, value):
     with pytest.raises(ParameterError, match=field):
         Unicycle(**{field: value})
+
+
+def test_more_than_half_a_turn_per_period_is_refused():
+    Unicycle(max_turn_rate=math.pi, dt=1.0)
+    with pytest.raises(ParameterError, match="max_turn_rate must be <= pi / dt"):
+        Unicycle(max_turn_rate=math.pi + 1e-9, dt=1.0)
 
 
 @pytest.mark.parametrize("kwargs, field", [
@@ -132,6 +258,7 @@ def test_non_positive_robot_limits_raise(field, value):
     ({"virtual_target_distance": 0.0}, "virtual_target_distance"),
     ({"safety_margin": -0.01}, "safety_margin"), ({"follow_distance": 0.0}, "follow_distance"),
     ({"max_follow_steps": 0}, "max_follow_steps"), ({"trap_steps": -1}, "trap_steps"),
+    ({"n_headings": 10**6}, "n_headings"), ({"n_speeds": "4"}, "n_speeds"),
 ])
 def test_bad_fuzzy_parameters_raise(kwargs, field):
     with pytest.raises(ParameterError, match=field):
