@@ -34,7 +34,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from subtask_opt.cli import agv, grid, polygon, reactive, solve
+    from subtask_opt.cli import agv, grid, polygon, reactive, solve, tsp
 
     parser = _Parser(
         prog="subtask-opt",
@@ -49,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
         dest="suite", metavar="SUITE", parser_class=_Parser)
     bench.required = True
     solve.register(root)
+    tsp.register(root)
     for family in (grid, polygon, reactive, agv):
         family.register(plan, bench)
     return parser

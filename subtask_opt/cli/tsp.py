@@ -1,0 +1,66 @@
+"""``subtask-opt tsp FILE.tsp``: solve a TSPLIB instance and prove how good the tour is."""
+
+from __future__ import annotations
+
+import argparse
+
+from subtask_opt.cli._common import (
+    EXIT_OK,
+    add_no_progress,
+    add_outputs,
+    positive_float,
+    refuse_overwriting_inputs,
+    seed,
+    write_json,
+)
+
+DEFAULT_TIME_LIMIT = 10.0
+
+
+def register(root: argparse._SubParsersAction) -> None:
+    """Add the ``tsp`` command."""
+    p = root.add_parser(
+        "tsp", help="solve a TSPLIB .tsp file and bound the gap to the optimum",
+        description="Read a TSPLIB file (EUC_2D, CEIL_2D, ATT, GEO or EXPLICIT weights), find "
+                    "a short closed tour with the micro-GA solver, and prove a Held-Karp "
+                    "lower bound: the tour is at most 'gap' above the optimum. Lengths are in "
+                    "TSPLIB units (integer distances under the file's rounding rule).")
+    p.add_argument("file", metavar="FILE.tsp", help="the TSPLIB file")
+    p.add_argument("--time-limit", type=positive_float, default=DEFAULT_TIME_LIMIT,
+                   metavar="SECONDS",
+                   help=f"stop the search after this long (default {DEFAULT_TIME_LIMIT:g}); it "
+                        "also stops once the tour stops improving. The lower bound then gets "
+                        "what the search left, and at least a quarter of the limit")
+    p.add_argument("--seed", type=seed, default=0, help="solver seed (default 0)")
+    add_outputs(p, what="order, length, lower_bound, gap_bound and runtime_s",
+                plot="the tour over the node coordinates")
+    add_no_progress(p)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from subtask_opt.arm.tsplib import read_tsplib, solve_tsp
+    from subtask_opt.base.errors import InputDataError
+
+    refuse_overwriting_inputs([args.file], [args.json, args.plot])
+    instance = read_tsplib(args.file)
+    if args.plot and instance.coordinates is None:
+        raise InputDataError(f"{args.file}: --plot needs node coordinates, and this "
+                             f"{instance.edge_weight_type} file has none")
+    solution = solve_tsp(instance, time_limit=args.time_limit, seed=args.seed,
+                         progress=not args.no_progress)
+    print(f"{instance.name}: {instance.dimension} cities, {instance.edge_weight_type}")
+    print(f"tour length  {solution.length}")
+    print(f"lower bound  {solution.lower_bound:g}")
+    print(f"gap          <= {100 * solution.gap_bound:.3f}% above the optimum")
+    print(f"runtime      {solution.runtime_s:.2f} s (bound {solution.bound_runtime_s:.2f} s, "
+          f"{solution.generations} generations, seed {solution.seed})")
+    if args.json:
+        write_json(args.json, solution.to_dict())
+        print(f"wrote {args.json}")
+    if args.plot:
+        from subtask_opt.plotting.tsp import save_tour_figure
+
+        save_tour_figure(instance, solution, args.plot)
+        print(f"wrote {args.plot}")
+    return EXIT_OK
