@@ -12,10 +12,12 @@
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, SubtaskOptError
+from subtask_opt.base.files import quiet_stdout
 
 
 def _square_matrix(matrix: np.ndarray) -> np.ndarray:
@@ -75,13 +77,15 @@ def held_karp(matrix: np.ndarray) -> tuple[float, np.ndarray]:
     return best, np.array([0] + order[::-1], dtype=np.int64)
 
 
-def milp_optimum(matrix: np.ndarray, *, max_rounds: int = 200) -> tuple[float, np.ndarray]:
+def milp_optimum(matrix: np.ndarray, *, max_rounds: int = 200,
+                 time_limit: float | None = None) -> tuple[float, np.ndarray]:
     """Certified minimum closed tour of a symmetric matrix by MILP with subtour cuts.
 
     Returns ``(cost, order)`` with ``order`` starting at 0. Raises
-    :class:`SubtaskOptError` if HiGHS is not installed or does not prove
-    optimality.
+    :class:`SubtaskOptError` if HiGHS does not prove optimality (within
+    ``time_limit`` seconds in all, when given). Nothing is printed.
     """
+    deadline = None if time_limit is None else time.perf_counter() + float(time_limit)
     m = _square_matrix(matrix)
     if not np.allclose(m, m.T, rtol=1e-9, atol=1e-12):
         raise ParameterError("milp_optimum needs a symmetric matrix")
@@ -93,7 +97,8 @@ def milp_optimum(matrix: np.ndarray, *, max_rounds: int = 200) -> tuple[float, n
     n = m.shape[0]
     iu, ju = np.triu_indices(n, 1)
     n_edges = len(iu)
-    h = highspy.Highs()
+    with quiet_stdout():  # HiGHS prints its banner on construction
+        h = highspy.Highs()
     h.setOptionValue("output_flag", False)
     h.setOptionValue("mip_rel_gap", 0.0)
     inf = highspy.kHighsInf
@@ -109,6 +114,11 @@ def milp_optimum(matrix: np.ndarray, *, max_rounds: int = 200) -> tuple[float, n
                        dtype=np.int32)
         h.addRow(2.0, 2.0, len(idx), idx, np.ones(len(idx)))
     for _ in range(max_rounds):
+        if deadline is not None:
+            left = deadline - time.perf_counter()
+            if left <= 0:
+                raise SubtaskOptError(f"milp_optimum: not proven within {time_limit} s")
+            h.setOptionValue("time_limit", left)
         h.run()
         status = h.getModelStatus()
         if status != highspy.HighsModelStatus.kOptimal:

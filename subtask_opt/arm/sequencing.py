@@ -22,12 +22,14 @@ import numpy as np
 
 from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
+from subtask_opt.arm.bound import lower_bound
 from subtask_opt.arm.configurations import penalty_for
 from subtask_opt.arm.report import TourReport, tour_report
 from subtask_opt.base.errors import (
     InputDataError,
     NoPathError,
     ParameterError,
+    SubtaskOptError,
     require_in_range,
     require_int,
 )
@@ -38,6 +40,7 @@ from subtask_opt.base.stop import (
     NoImprovement,
     Progress,
     StoppingCriterion,
+    TargetCost,
     as_criteria,
 )
 from subtask_opt.ga.config import GAConfig
@@ -81,10 +84,13 @@ class SolverParams:
             randomised nearest neighbour instead of kicking the best tour.
         max_segment: (default preset) longest run of subtasks Or-opt moves.
         neighbours: (default preset) candidate list length of the local search.
+        bound_max_nodes: compute a Held-Karp lower bound (and stop as soon as a
+            tour meets it) for problems up to this many nodes; 0 never.
     """
 
     preset: str = "default"
     population: int = 5
+    bound_max_nodes: int = 300
     convergence_tol: float = 0.01
     grasp_share: float = 0.25
     max_segment: int = 3
@@ -94,11 +100,12 @@ class SolverParams:
         if self.preset not in PRESETS:
             raise ParameterError(
                 f"SolverParams.preset must be one of {', '.join(PRESETS)}, got {self.preset!r}")
-        require_int("SolverParams", "population", self.population, 3)
+        require_int("SolverParams", "population", self.population, 3, 1000)
         require_in_range("SolverParams", "convergence_tol", self.convergence_tol, 0.0, 1.0)
         require_in_range("SolverParams", "grasp_share", self.grasp_share, 0.0, 1.0)
-        require_int("SolverParams", "max_segment", self.max_segment, 1)
-        require_int("SolverParams", "neighbours", self.neighbours, 1)
+        require_int("SolverParams", "max_segment", self.max_segment, 1, 1000)
+        require_int("SolverParams", "neighbours", self.neighbours, 1, 1000)
+        require_int("SolverParams", "bound_max_nodes", self.bound_max_nodes, 0, MAX_NODES)
 
     @classmethod
     def paper(cls) -> SolverParams:
@@ -302,6 +309,13 @@ class Result:
         seed: the seed that reproduces this result.
         history: best and mean cost per generation, restart generations.
         preset: the solver preset.
+        lower_bound: no tour of the problem is shorter (Held-Karp 1-tree bound,
+            see :mod:`subtask_opt.arm.bound`); None when not computed.
+        gap_bound: ``(total_time - lower_bound) / lower_bound``, the largest
+            relative distance from the optimum this answer can have (0: proven
+            optimal).
+        certified: ``"optimal (proven)"`` when the MILP proved the answer optimal,
+            the reason otherwise (``solve(..., certify=True)``); None when not asked.
         report: for an arm problem, what the tour means for the arm
             (:class:`~subtask_opt.arm.report.TourReport`); None for a matrix.
     """
@@ -316,7 +330,15 @@ class Result:
     seed: int
     history: History
     preset: str
+    lower_bound: float | None = None
+    certified: str | None = None
     report: TourReport | None = None
+
+    @property
+    def gap_bound(self) -> float | None:
+        if self.lower_bound is None or self.lower_bound <= 0:
+            return None
+        return max(0.0, (self.total_time - self.lower_bound) / self.lower_bound)
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -328,8 +350,15 @@ class Result:
             f"total time {self.total_time:.4f} s  ({self.preset} preset, seed {self.seed}, "
             f"{self.generations} generations, {self.restarts} restarts, "
             f"{self.runtime_s * 1e3:.2f} ms)",
-            "order: " + " ".join(str(int(i)) for i in self.order),
         ]
+        if self.lower_bound is not None:
+            gap = self.gap_bound
+            lines.append(f"lower bound {self.lower_bound:.4f} s (gap at most "
+                         f"{100 * gap:.3f}%)" if gap is not None else
+                         f"lower bound {self.lower_bound:.4f} s")
+        if self.certified is not None:
+            lines.append(f"certificate: {self.certified}")
+        lines.append("order: " + " ".join(str(int(i)) for i in self.order))
         if self.report is not None and self.report.configurations_mode == "optimize":
             c = self.report.configurations[self.order]
             lines.append("elbow: " + " ".join("du"[int(b)] for b in c)
@@ -348,6 +377,9 @@ class Result:
             "runtime_s": self.runtime_s,
             "seed": self.seed,
             "preset": self.preset,
+            "lower_bound": self.lower_bound,
+            "gap_bound": self.gap_bound,
+            "certified": self.certified,
             "history": self.history.to_dict(),
             "report": None if self.report is None else self.report.to_dict(),
         }
@@ -355,7 +387,8 @@ class Result:
 
 def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
           stop: StoppingCriterion | list[StoppingCriterion] | None = None,
-          params: SolverParams | None = None, progress: bool = False) -> Result:
+          params: SolverParams | None = None, progress: bool = False,
+          certify: bool = False, certify_time_limit: float = 60.0) -> Result:
     """Find a minimum-time closed tour through the problem's subtasks (or nodes).
 
     Args:
@@ -365,6 +398,9 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             default: ``params.default_stop()``.
         params: solver parameters (default: ``SolverParams()``).
         progress: show a progress bar on stderr (a terminal only) for runs over a second.
+        certify: prove optimality with the exact MILP (symmetric costs, fixed
+            configurations) within ``certify_time_limit`` seconds; the outcome is
+            in :attr:`Result.certified`.
     """
     if not isinstance(problem, (SequencingProblem, MatrixProblem)):
         raise ParameterError(f"solve needs a SequencingProblem or MatrixProblem, got "
@@ -396,6 +432,13 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             search = SEARCH_PAPER
         else:
             search = SEARCH_FAST if problem.symmetric else SEARCH_EXACT
+    bound = None
+    if n <= params.bound_max_nodes:
+        # every leg costs at least data[:, :n] (the cheapest configuration pair), so a
+        # bound of that matrix bounds the tour; a tour that meets it is proven optimal
+        bound = lower_bound(data[:, :n], seed=0)
+        if stop is None:
+            criteria = [*criteria, TargetCost(bound * (1 + 1e-12) + 1e-12)]
     aux = make_aux(neighbours, nearest_fallback=not paper,
                    grasp_share=params.grasp_share, max_segment=params.max_segment,
                    neighbours=params.neighbours, search=search)
@@ -432,6 +475,9 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             "to drive such legs as joint moves")
     if isinstance(problem, SequencingProblem):
         report = tour_report(problem, order, configs, legs)
+    certified = None
+    if certify:
+        certified = _certify(problem, float(np.sum(legs)), certify_time_limit)
     return Result(
         order=order,
         total_time=float(np.sum(legs)),
@@ -443,8 +489,29 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         seed=int(seed),
         history=outcome.history,
         preset=params.preset,
+        lower_bound=bound,
+        certified=certified,
         report=report,
     )
+
+
+def _certify(problem: SequencingProblem | MatrixProblem, total: float, time_limit: float) -> str:
+    """Prove ``total`` optimal with the MILP, or say why not."""
+    from subtask_opt.arm.exact import milp_optimum
+
+    require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
+    if isinstance(problem, SequencingProblem) and problem.optimizes_configurations:
+        return "not certified: the MILP handles fixed configurations only"
+    if not problem.symmetric:
+        return "not certified: the MILP handles symmetric costs only"
+    try:
+        optimum, _ = milp_optimum(problem.matrix, time_limit=time_limit)
+    except SubtaskOptError as exc:
+        return f"not certified: {exc}"
+    if total <= optimum * (1 + 1e-9) + 1e-12:
+        return "optimal (proven)"
+    excess = 100 * (total / optimum - 1)
+    return f"not optimal: the proven optimum is {optimum:.6g} ({excess:.4f}% less)"
 
 
 def _rotate(tour: np.ndarray, first: int) -> np.ndarray:

@@ -107,13 +107,26 @@ def _checked_int(text: str) -> int:
 
 @contextmanager
 def quiet_stderr() -> Iterator[None]:
-    """Silence what C++ libraries write to file descriptor 2 (their own error lines)."""
+    """Silence what C++ libraries write to stderr (their own error lines)."""
+    with _quiet(sys.stderr):
+        yield
+
+
+@contextmanager
+def quiet_stdout() -> Iterator[None]:
+    """Silence what C++ libraries write to stdout (solver banners)."""
+    with _quiet(sys.stdout):
+        yield
+
+
+@contextmanager
+def _quiet(stream: Any) -> Iterator[None]:
     try:
-        fd = sys.stderr.fileno()
-    except (AttributeError, OSError, ValueError):  # no real stderr (captured): nothing to do
+        fd = stream.fileno()
+    except (AttributeError, OSError, ValueError):  # no real file (captured): nothing to do
         yield
         return
-    sys.stderr.flush()
+    stream.flush()
     saved = os.dup(fd)
     try:
         with open(os.devnull, "w") as devnull:

@@ -68,6 +68,11 @@ def register(root: argparse._SubParsersAction) -> None:
     p.add_argument("--preset", default="default", choices=PRESETS,
                    help="solver preset (default: micro-GA with local search)")
     p.add_argument("--seed", type=seed, default=0, help="solver seed in [0, 2**63) (default 0)")
+    p.add_argument("--certify", action="store_true",
+                   help="prove the answer optimal with the exact MILP (symmetric costs, fixed "
+                        "configurations), or report the remaining gap")
+    p.add_argument("--certify-time-limit", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
+                   default=60.0, metavar="SECONDS", help="time for --certify (default 60)")
     limits = p.add_argument_group("joint limits (replace the robot's; a scalar or one per joint)")
     limits.add_argument("--vmax", type=floats, metavar="V[,V]", help="joint speed limits, rad/s")
     limits.add_argument("--amax", type=floats, metavar="A[,A]",
@@ -138,7 +143,8 @@ def run(args: argparse.Namespace) -> int:
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
         stop = stop + params.default_stop(len(subtasks))
     result = solve(problem, seed=args.seed, stop=stop, params=params,
-                   progress=not args.no_progress)
+                   progress=not args.no_progress, certify=args.certify,
+                   certify_time_limit=args.certify_time_limit)
     report = result.report
     assert report is not None
     print(result.summary())

@@ -16,6 +16,7 @@ from subtask_opt import (
     solve,
 )
 from subtask_opt.arm.exact import held_karp, milp_optimum
+from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
 
 
@@ -70,7 +71,7 @@ def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
 def test_result_is_consistent(arm):
     problem = SequencingProblem(builtin_case("square20", arm), arm, time_model="trapezoid",
                                 first=7)
-    r = solve(problem, seed=4)
+    r = solve(problem, seed=4, params=SolverParams(bound_max_nodes=0))  # no early bound stop
     assert r.order[0] == 7
     assert sorted(r.order.tolist()) == list(range(20))
     np.testing.assert_allclose(r.leg_times, problem.matrix[r.order, np.roll(r.order, -1)])
@@ -145,3 +146,32 @@ def test_bad_first_subtask_and_missing_inputs(arm):
         SequencingProblem(builtin_case("square20", arm), "planar_2r")
     with pytest.raises(ParameterError, match="permutation"):
         SequencingProblem.from_matrix(_euclidean(0, 5)).tour_time(np.array([0, 1, 1, 2, 3]))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_lower_bound_is_below_the_certified_optimum_and_the_answer(arm, seed):
+    problem = SequencingProblem(random_subtasks(arm, 12 + seed, seed=seed), arm,
+                                time_model="trapezoid")
+    optimum, _ = milp_optimum(problem.matrix)
+    result = solve(problem, seed=seed, certify=True)
+    assert result.lower_bound is not None
+    assert result.lower_bound <= optimum * (1 + 1e-12)
+    assert optimum <= result.total_time * (1 + 1e-12) + 1e-12
+    assert result.certified == "optimal (proven)"
+    assert result.gap_bound == pytest.approx((result.total_time - result.lower_bound)
+                                             / result.lower_bound)
+    d = result.to_dict()
+    assert d["lower_bound"] == result.lower_bound and d["gap_bound"] == result.gap_bound
+
+
+def test_configured_problems_get_a_bound_but_no_milp_certificate(arm):
+    problem = SequencingProblem(random_subtasks(arm, 8, seed=3), arm, time_model="joint")
+    result = solve(problem, seed=0, certify=True)
+    assert result.lower_bound is not None and result.lower_bound <= result.total_time
+    assert result.certified is not None and result.certified.startswith("not certified")
+
+
+def test_no_bound_above_the_size_limit(arm):
+    problem = SequencingProblem(random_subtasks(arm, 12, seed=1), arm, time_model="trapezoid")
+    result = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0))
+    assert result.lower_bound is None and result.gap_bound is None
