@@ -46,6 +46,7 @@ bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/reactive.py --json $(OUT)/bench/reactive.json
 	$(BIN)/python benchmarks/agv.py --json $(OUT)/bench/agv.json
 	$(BIN)/python benchmarks/tsplib.py --json $(OUT)/bench/tsplib.json
+	$(BIN)/python benchmarks/batch.py --json $(OUT)/bench/batch.json
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check subtask_opt tests benchmarks

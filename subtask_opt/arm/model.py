@@ -255,6 +255,16 @@ class Arm:
                                            pin.LOCAL_WORLD_ALIGNED)
             return np.array(jac[:2, :2])
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickle without the lock (a copy gets a fresh one)."""
+        state = dict(vars(self))
+        state.pop("_data_lock", None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        vars(self).update(state)
+        self._data_lock = threading.Lock()
+
     def with_joint_limits(self, *, velocity: Any = None, acceleration: Any = None,
                           jerk: Any = None) -> Arm:
         """This arm with other speed, acceleration or jerk limits (a scalar or one per joint)."""

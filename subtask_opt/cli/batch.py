@@ -1,0 +1,105 @@
+"""``subtask-opt batch``: solve many subtask files at once, locally or on a Dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from subtask_opt.cli._common import (
+    EXIT_FAILED,
+    EXIT_OK,
+    add_no_progress,
+    json_output,
+    non_negative_int,
+    positive_float,
+    positive_int,
+    refuse_overwriting_inputs,
+    seed,
+    write_json,
+)
+
+# failed jobs printed one per line before "... and N more"
+_SHOWN_FAILURES = 20
+
+
+def register(root: argparse._SubParsersAction) -> None:
+    """Add the ``batch`` command."""
+    p = root.add_parser(
+        "batch",
+        help="solve many subtask files in parallel (local processes or a Dask cluster)",
+        description="Solve every job of JOBS (subtask files, or JSON manifests of jobs with "
+                    "robot, time model and seed each) on local worker processes or an existing "
+                    "dask.distributed cluster, and write one result per job as JSON. A job that "
+                    "fails is reported with its error; the others run on.",
+    )
+    p.add_argument("jobs", nargs="+", metavar="JOBS",
+                   help='subtask files (.csv with header x,y[,theta] or .json) or manifests '
+                        '(.json: [{"id": ..., "case": FILE|square20|random30, "robot": ..., '
+                        '"time_model": ..., "seed": ..., "case_seed": ...}, ...])')
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="address of a running dask scheduler, e.g. tcp://head:8786 "
+                            "(needs pip install subtask_opt[cluster])")
+    where.add_argument("--workers", type=non_negative_int, metavar="N",
+                       help="local worker processes (default: the machine's cores; "
+                            "0 solves in this process)")
+    p.add_argument("--seed", type=seed, default=None, metavar="N",
+                   help="solver seed of every job (default: each manifest job's own seed, "
+                        "0 for subtask files)")
+    stop = p.add_argument_group("stopping, per job (any criterion given stops the run)")
+    stop.add_argument("--max-generations", type=positive_int, metavar="N")
+    stop.add_argument("--max-runtime", type=positive_float, metavar="SECONDS")
+    stop.add_argument("--no-improvement", type=positive_int, metavar="N",
+                      help="stop after N generations without a better tour")
+    p.add_argument("--json", required=True, metavar="OUT.json", type=json_output,
+                   help="write every job's result (and the failed jobs' errors) as JSON")
+    add_no_progress(p)
+    p.set_defaults(handler=run)
+
+
+def _stop_criteria(args: argparse.Namespace) -> list | None:
+    from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement
+
+    criteria: list = []
+    if args.max_generations is not None:
+        criteria.append(MaxGenerations(args.max_generations))
+    if args.max_runtime is not None:
+        criteria.append(MaxRuntime(args.max_runtime))
+    if args.no_improvement is not None:
+        criteria.append(NoImprovement(args.no_improvement))
+    return criteria or None
+
+
+def run(args: argparse.Namespace) -> int:
+    from subtask_opt.batch import default_workers, load_jobs, solve_many
+
+    refuse_overwriting_inputs(args.jobs, [args.json])
+    jobs = load_jobs(args.jobs)
+    workers = args.workers
+    if args.scheduler is None and workers is None:
+        workers = default_workers()
+    started = time.perf_counter()
+    results = solve_many(jobs, seeds=args.seed, stop=_stop_criteria(args),
+                         client=args.scheduler, workers=workers,
+                         progress=not args.no_progress and sys.stderr.isatty())
+    wall = time.perf_counter() - started
+    failed = [r for r in results if not r.success]
+    # wall_s includes starting the workers and loading their kernels;
+    # benchmarks/batch.py measures the per-job overhead after warm-up
+    slots = len({r.worker for r in results if r.worker})
+    summary = {
+        "jobs": len(results), "succeeded": len(results) - len(failed), "failed": len(failed),
+        "wall_s": wall,
+        "where": args.scheduler or ("this process" if workers == 0 else f"{workers} local workers"),
+        "workers_used": slots, "jobs_time_s": sum(r.worker_time_s for r in results),
+    }
+    write_json(args.json, {"summary": summary, "jobs": [r.to_dict() for r in results]})
+    print(f"{len(results)} jobs: {summary['succeeded']} solved, {len(failed)} failed "
+          f"({wall:.2f} s on {summary['where']})")
+    for r in failed[:_SHOWN_FAILURES]:
+        print(f"  failed {r.id}: {r.error}")
+    if len(failed) > _SHOWN_FAILURES:
+        print(f"  ... and {len(failed) - _SHOWN_FAILURES} more (see {args.json})")
+    print(f"wrote {args.json}")
+    return EXIT_FAILED if failed else EXIT_OK
