@@ -263,9 +263,11 @@ def main() -> None:
     ap.add_argument("--search", action="store_true",
                     help="search the paper's start/goal and first-obstacle reading instead")
     ap.add_argument("--step", type=float, default=10.0, help="coarse grid step of --search")
+    ap.add_argument("--refine-step", type=float, default=1.0,
+                    help="fine grid step of --search around the best coarse pairs")
     args = ap.parse_args()
     if args.search:
-        found = search(step=args.step)
+        found = search(step=args.step, refine_step=args.refine_step)
         if args.json:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps({"paper": PAPER_TABLE1, "best": found}, indent=1))

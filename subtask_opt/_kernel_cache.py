@@ -3,8 +3,8 @@
 numba keys its on-disk cache on the file that defines a function only: edit a
 kernel that others call and the callers keep running the old code. So the
 cache lives in a folder named after a hash of every kernel source file of the
-package: any edit to any of them selects a fresh folder, and stale folders are
-removed. Import this module before any module that defines a kernel (the
+package: any edit to any of them selects a fresh folder, and folders unused for a
+day are removed. Import this module before any module that defines a kernel (the
 package's ``__init__`` does).
 
 The root folder is ``$SUBTASK_OPT_CACHE_DIR`` or, by default,
@@ -18,6 +18,7 @@ import hashlib
 import os
 import shutil
 import sys
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -25,6 +26,8 @@ from pathlib import Path
 import numba
 
 PACKAGE_DIR = Path(__file__).resolve().parent
+STALE_AFTER_S = 24 * 3600.0
+"""A cache generation unused for this long is removed (others may still be in use)."""
 _PREFIX = "kernels-"
 
 
@@ -106,8 +109,10 @@ def _activate() -> Path:
     folder = cache_dir()
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        folder.touch()  # mark it in use
         for old in folder.parent.glob(f"{_PREFIX}*"):
-            if old != folder:
+            # another checkout or process may still use a recent one: remove only old ones
+            if old != folder and time.time() - old.stat().st_mtime > STALE_AFTER_S:
                 shutil.rmtree(old, ignore_errors=True)
     except OSError:  # unwritable: numba falls back to compiling in memory
         pass

@@ -54,21 +54,22 @@ _REL_EPS = 1e-9
 MEMORY_LIMIT_BYTES = 1 << 30
 """The planners' dense structures may take at most this much memory (1 GiB)."""
 
-_MAKLINK_BYTES_PER_V2 = 240
+_MAKLINK_BYTES_PER_V2 = 320
 """MAKLINK's candidate links: about 4.5 V^2 candidates (vertex-vertex and vertex-wall
-foot) of ~50 bytes each (end ids, length, sort order, masks); measured ~210 V^2 bytes
-with tracemalloc on random worlds of 216 and 600 vertices."""
+foot) of ~70 bytes each (end ids, length, sort order, wall masks); tracemalloc measured
+a peak of 310 V^2 bytes on random worlds of 216 and 600 vertices."""
 
 
 def planner_memory_bytes(n_vertices: int) -> dict[str, int]:
     """Estimated peak memory of each polygon planner's graph for ``n_vertices`` vertices.
 
-    ``visibility``: the dense (V + 2)^2 float64 weight matrix, plus its
-    distance and mask temporaries (about 5 such matrices); ``maklink`` (also
-    behind improved Dijkstra and PSO): the candidate links.
+    ``visibility``: the dense (V + 2)^2 float64 weight matrix and its
+    distance and mask temporaries, 8 such matrices (tracemalloc measured 33 to
+    64 V^2 bytes); ``maklink`` (also behind improved Dijkstra and PSO): the
+    candidate links, which dominate.
     """
     v = int(n_vertices)
-    return {"visibility": 5 * (v + 2) ** 2 * 8, "maklink": _MAKLINK_BYTES_PER_V2 * v * v}
+    return {"visibility": 8 * (v + 2) ** 2 * 8, "maklink": _MAKLINK_BYTES_PER_V2 * v * v}
 
 
 def _max_vertices() -> int:
@@ -85,7 +86,8 @@ def _max_vertices() -> int:
 
 MAX_VERTICES = _max_vertices()
 """Most obstacle vertices a world may have: the largest V whose planner memory
-(:func:`planner_memory_bytes`) fits in :data:`MEMORY_LIMIT_BYTES` (about 2100)."""
+(:func:`planner_memory_bytes`) fits in :data:`MEMORY_LIMIT_BYTES` (1831). MAKLINK
+takes minutes at that size (9-15 s for 600 vertices, growing about as V^2.5)."""
 
 MAX_FILE_BYTES = 8 * 1024 * 1024
 """Largest world JSON file read (8 MiB; MAX_VERTICES vertices take well under 1 MiB)."""
@@ -302,7 +304,7 @@ class PolygonWorld:
                 raise InputDataError(f"{source}: {len(text)} bytes is over the limit of "
                                      f"{MAX_FILE_BYTES} bytes for a world file")
             try:
-                text = text.decode("utf-8")
+                text = text.decode("utf-8-sig")  # a leading byte-order mark is dropped
             except UnicodeDecodeError as exc:
                 raise InputDataError(f"{source}: not UTF-8 text ({exc.reason} at byte "
                                      f"{exc.start})") from None
