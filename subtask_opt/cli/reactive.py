@@ -99,7 +99,7 @@ def _robot_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--noise", type=float, default=0.0, metavar="STD",
                    help="standard deviation of the sonar noise, in [0, range] (default 0)")
     g.add_argument("--range", dest="max_range", type=float, default=None, metavar="R",
-                   help="sonar range R_max > 0 (default 2.5)")
+                   help="sonar range R_max in (0, 1e6] (default 2.5)")
     g.add_argument("--max-speed", type=float, default=None, metavar="V",
                    help="speed limit > 0, at most range / dt (default 0.3)")
     g.add_argument("--max-turn-rate", type=float, default=None, metavar="RAD_PER_S",

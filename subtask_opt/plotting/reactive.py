@@ -40,9 +40,14 @@ def _axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
     import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=figsize)
+        fig, ax = plt.subplots(figsize=figsize, layout="constrained")
         return fig, ax
     return ax.figure, ax  # type: ignore[return-value]
+
+
+def save_figure(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
+    """Write ``fig`` to ``path`` (folders created) and close it."""
+    return _save(fig, path, dpi)
 
 
 def _save(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
@@ -98,6 +103,17 @@ def _draw_robot(ax: Axes, run: ReactiveRun, i: int, color: str = "C0", beams: bo
     return out
 
 
+def _legend_below(ax: Axes, handles: list[Any] | None = None, ncol: int = 3,
+                  fontsize: int = 7) -> None:
+    """A frameless legend a fixed 30 points under the axes (below the x label)."""
+    from matplotlib.transforms import ScaledTranslation
+
+    below = ax.transAxes + ScaledTranslation(0.0, -30.0 / 72.0, ax.figure.dpi_scale_trans)
+    kw: dict[str, Any] = {} if handles is None else {"handles": handles}
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below,
+              fontsize=fontsize, ncol=ncol, frameon=False, **kw)
+
+
 def _run_title(run: ReactiveRun) -> str:
     return (f"{run.navigator} on {run.world}: {run.outcome.value} after {run.steps} steps "
             f"({run.time:.0f} s), path {run.path_length:.2f} m")
@@ -137,7 +153,7 @@ def plot_run(world: PolygonWorld, run: ReactiveRun, *, ax: Axes | None = None,
                 Line2D([], [], color=_ECHO, lw=1, label="sonar beam with echo"),
                 Line2D([], [], color=_NO_ECHO, lw=1,
                        label=f"sonar beam, nothing within {run.max_range:g} m")]
-    ax.legend(handles=handles, loc="best", fontsize=7, framealpha=0.85)
+    _legend_below(ax, handles)
     ax.set_title(title or _run_title(run), fontsize=10)
     return fig
 
@@ -190,8 +206,7 @@ def plot_commands(run: ReactiveRun, *, ax: Axes | None = None) -> Figure:
         lines.append(ax.fill_between(t, 0, float(max(nearest.max(initial=0.0), 1e-9)),
                                      where=run.escaping, color="C1", alpha=0.15,
                                      step="post", label="wall following"))
-    ax.legend(handles=lines, loc="upper center", bbox_to_anchor=(0.5, -0.3), fontsize=7,
-              ncol=len(lines), frameon=False)
+    _legend_below(ax, lines, ncol=len(lines))
     ax.set_title(f"commands and nearest echo ({run.navigator} on {run.world})", fontsize=10)
     return fig
 
@@ -208,39 +223,61 @@ def run_figure(world: PolygonWorld, run: ReactiveRun) -> Figure:
 
     fuzzy = bool(np.any(np.isfinite(run.mu)))
     rows = 3 if fuzzy else 2
-    fig, axes = plt.subplots(rows, 1, figsize=(7.5, 7.5 + 2.6 * (rows - 1)),
-                             gridspec_kw={"height_ratios": [3] + [1] * (rows - 1)})
+    x0, y0, x1, y1 = world.bounds
+    top = 6.0 * min(max((y1 - y0) / (x1 - x0), 0.3), 1.6) + 1.8   # map, title and legend
+    fig, axes = plt.subplots(rows, 1, figsize=(7.5, top + 3.0 * (rows - 1)),
+                             gridspec_kw={"height_ratios": [top] + [3.0] * (rows - 1)},
+                             layout="constrained")
     plot_run(world, run, ax=axes[0])
     if fuzzy:
         plot_memberships(run, ax=axes[1])
     plot_commands(run, ax=axes[-1])
-    fig.tight_layout()
     return fig
 
 
 def plot_paper_runs(runs: Mapping[str, tuple[PolygonWorld, Sequence[ReactiveRun]]], *,
                     title: str | None = None) -> Figure:
-    """One panel per scenario with every navigator's trajectory overlaid (colour and
-    dash per navigator; the legend gives each run's outcome and path length)."""
+    """One panel per scenario with every navigator's trajectory overlaid (colour, dash and
+    width per navigator, so identical paths stay visible; the legend under each panel
+    gives each run's outcome and path length). Square worlds go two to a row, wide ones
+    (more than twice as wide as tall) get a row of their own."""
     import matplotlib.pyplot as plt
 
-    n = len(runs)
-    fig, axes = plt.subplots(1, n, figsize=(5.2 * n, 5.8), squeeze=False)
-    for ax, (scenario, (world, rs)) in zip(axes[0], runs.items(), strict=True):
+    rows: list[list[str]] = []
+    pending: list[str] = []
+    for name, (world, _) in runs.items():
+        x0, y0, x1, y1 = world.bounds
+        if x1 - x0 > 2.0 * (y1 - y0):
+            rows.append([name, name])
+        else:
+            pending.append(name)
+            if len(pending) == 2:
+                rows.append(pending)
+                pending = []
+    if pending:
+        rows.append([pending[0], "."] if rows else [pending[0], pending[0]])
+    rows.sort(key=lambda r: r[0] == r[1])          # wide panels last
+    heights = [0.55 if r[0] == r[1] else 1.0 for r in rows]
+    layout: Any = rows
+    fig, axes = plt.subplot_mosaic(layout, figsize=(12.0, 5.6 * sum(heights) + 0.8),
+                                   height_ratios=heights, layout="constrained")
+    for name, (world, rs) in runs.items():
+        ax = axes[name]
         draw_world(ax, world)
         for i, run in enumerate(rs):
             colour, dash = _style(run.navigator, i)
-            ax.plot(run.poses[:, 0], run.poses[:, 1], color=colour, ls=dash, lw=1.8, alpha=0.85,
+            wide = i == 0
+            ax.plot(run.poses[:, 0], run.poses[:, 1], color=colour, ls=dash,
+                    lw=4.0 if wide else 1.6, alpha=0.4 if wide else 0.95, zorder=2 + i,
                     label=f"{run.navigator}: {run.outcome.value}, {run.path_length:.1f} m")
-            ax.plot(*run.poses[-1, :2], "o", color=colour, mfc="none", ms=6)
+            ax.plot(*run.poses[-1, :2], "o", color=colour, mfc="none", ms=7, zorder=2 + i)
         if rs:
-            ax.plot(*rs[0].start[:2], "o", color="k", ms=5, label="start")
-            ax.plot(*rs[0].goal, "*", color="red", ms=13, label="goal")
-        ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
-        ax.set_title(f"scenario {scenario}", fontsize=10)
+            ax.plot(*rs[0].start[:2], "o", color="k", ms=5, label="start", zorder=10)
+            ax.plot(*rs[0].goal, "*", color="red", ms=13, label="goal", zorder=10)
+        _legend_below(ax, fontsize=8)
+        ax.set_title(f"scenario {name}", fontsize=10)
     fig.suptitle(title or "reactive navigators on the paper's scenarios (sonar ring, 18 beams)",
                  fontsize=11)
-    fig.tight_layout()
     return fig
 
 
@@ -267,8 +304,7 @@ def save_suite_figure(table: Mapping[str, Mapping[str, Any]], path: str | Path, 
     ax.set_title("outcome of every run", fontsize=10)
     ratio = np.array([table[n]["mean_path_ratio"] for n in names], dtype=float)
     colours = [_style(n, i)[0] for i, n in enumerate(names)]
-    ax2.bar(x, np.nan_to_num(ratio, nan=0.0), color=colours,
-            label="path length / shortest path")
+    ax2.bar(x, np.nan_to_num(ratio, nan=0.0), color=colours)
     ax2.axhline(1.0, color="k", lw=0.8, ls="--", label="shortest path (visibility graph)")
     for xi, r in zip(x, ratio, strict=True):
         ax2.annotate("n/a" if not np.isfinite(r) else f"{r:.2f}", (xi, r if np.isfinite(r)

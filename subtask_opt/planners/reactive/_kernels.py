@@ -1,18 +1,35 @@
 """Numba kernels of the reactive navigators: unicycle arcs, ray casting, scan prediction.
 
 Arrays and scalars in, arrays out; the Python wrappers in :mod:`.sonar`,
-:mod:`.fuzzy_nav` and :mod:`.reactive_sim` validate and unpack.
+:mod:`.fuzzy`, :mod:`.unicycle` and :mod:`.simulation` validate and unpack.
 Edges are ``(m, 4)`` rows ``x1, y1, x2, y2``.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from subtask_opt.planners.polygon._kernels import point_segment_distance as _point_segment
+
+
+class RingParams(NamedTuple):
+    """The sonar ring as :func:`predict_scans` takes it."""
+
+    spacing: float      # angular width of one beam's sector (rad)
+    max_range: float    # sensing range
+    overlap: float      # predicted wall width relative to the sector
+
+
+class SweepParams(NamedTuple):
+    """How :func:`swept_clearance` checks a step."""
+
+    radius: float       # body radius
+    n_samples: int      # evenly spaced pieces to start from (>= 1)
+    tol: float          # shortest piece that is still split (> 0)
 
 
 @njit(cache=True)
@@ -50,7 +67,7 @@ def cast_rays(edges, ox, oy, angles, max_range):
 
 
 @njit(cache=True)
-def predict_scans(ranges, beam_angles, spacing, max_range, overlap, cand, mid):
+def predict_scans(ranges, beam_angles, ring, cand, mid):
     """Scans predicted at candidate poses by a rigid transform of the current scan.
 
     Every echo ``k`` (range < max_range) becomes a wall perpendicular to beam k,
@@ -60,16 +77,17 @@ def predict_scans(ranges, beam_angles, spacing, max_range, overlap, cand, mid):
 
     Args:
         ranges: (n,) current readings; beam_angles: (n,) sensor angles (robot frame);
-            spacing: angular width of one beam's sector (rad).
+        ring: :class:`RingParams`.
         cand: (c, 3) candidate poses x, y, heading; mid: (c, 2) arc midpoints.
 
     Returns:
         pred: (c, n) predicted readings; clearance: (c,) smallest distance from the
         candidate or its arc midpoint to any predicted wall (inf if none).
     """
+    max_range = ring.max_range
     n = ranges.shape[0]
     c = cand.shape[0]
-    half = math.tan(0.5 * min(spacing, 2.0)) * overlap
+    half = math.tan(0.5 * min(ring.spacing, 2.0)) * ring.overlap
     walls = np.empty((n, 4))
     m = 0
     for k in range(n):
@@ -159,7 +177,7 @@ def _contact(x, y, th, v, omega, dt, edges, radius, a, b, tol):
 
 
 @njit(cache=True)
-def swept_clearance(x, y, th, v, omega, dt, edges, radius, n_samples, tol):
+def swept_clearance(x, y, th, v, omega, dt, edges, sweep):
     """Certified collision test of the body circle swept along one unicycle arc.
 
     The centre's distance to the walls is 1-Lipschitz in arc length, so on a
@@ -171,15 +189,17 @@ def swept_clearance(x, y, th, v, omega, dt, edges, radius, n_samples, tol):
 
     Args:
         x, y, th: start pose; v, omega: command held for ``dt``.
-        edges: (m, 4) walls; radius: body radius.
-        n_samples: evenly spaced pieces to start from (>= 1).
-        tol: shortest piece that is still split (world units, > 0).
+        edges: (m, 4) walls.
+        sweep: :class:`SweepParams` (body radius, initial pieces, tolerance).
 
     Returns:
         ``(min_clearance, hit, fraction)``: the smallest sampled clearance
         (distance minus radius), whether the body meets a wall, and the
         fraction of the step at which it first touches (to ``tol``; 1.0 if never).
     """
+    radius = sweep.radius
+    n_samples = sweep.n_samples
+    tol = sweep.tol
     length = abs(v) * dt
     d0 = _clearance_at(x, y, th, v, omega, dt, 0.0, edges)
     min_clear = d0 - radius

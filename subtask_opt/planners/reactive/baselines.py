@@ -2,7 +2,7 @@
 
 Both are classic Borenstein-Koren reactive methods, rebuilt for a ring of range
 sensors instead of a certainty grid, so that the comparison with
-:class:`.fuzzy_nav.FuzzyNavigator` isolates the decision rule:
+:class:`.fuzzy.FuzzyNavigator` isolates the decision rule:
 
 * :class:`VFFNavigator` (virtual force field): each echo pushes the robot away
   along its beam with a force growing as the echo nears, the goal pulls with a

@@ -280,6 +280,9 @@ class FuzzyNavigator:
     """Fuzzy via-point selection with optional local-minimum escape.
 
     Stateful (the wall-following episode); call :meth:`reset` before a new run.
+    Not for sharing between threads: one navigator per run (:func:`.simulation.simulate`
+    builds a fresh one per call when given a name); the robot and sonar it holds are
+    immutable and may be shared.
     """
 
     def __init__(self, robot: Unicycle, sonar: SonarRing,

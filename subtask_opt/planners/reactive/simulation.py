@@ -338,8 +338,10 @@ def simulate(world: PolygonWorld, start: Any, goal: Any, navigator: str | Naviga
     nav.reset()
     rng = np.random.default_rng(seed)
     edges = scene_edges(world)
-    n_samples = min(MAX_SWEEP_SAMPLES, max(1, math.ceil(robot.max_step / (0.5 * robot.radius))))
-    tol = max(world.eps, 1e-12)
+    sweep = K.SweepParams(
+        radius=float(robot.radius),
+        n_samples=min(MAX_SWEEP_SAMPLES, max(1, math.ceil(robot.max_step / (0.5 * robot.radius)))),
+        tol=max(world.eps, 1e-12))
 
     t0 = time.perf_counter()
     pose = s.copy()
@@ -366,8 +368,7 @@ def simulate(world: PolygonWorld, start: Any, goal: Any, navigator: str | Naviga
         d = nav.decide(pose, ranges, g)
         v, omega = robot.clip(d.v, d.omega)
         clear, hit, frac = K.swept_clearance(float(pose[0]), float(pose[1]), float(pose[2]),
-                                             v, omega, robot.dt, edges, robot.radius,
-                                             n_samples, tol)
+                                             v, omega, robot.dt, edges, sweep)
         min_clear = min(min_clear, float(clear))
         if hit:
             v, omega = v * frac, omega * frac

@@ -34,6 +34,8 @@ if TYPE_CHECKING:
 
 MAX_BEAMS = 3600
 """Most sensors a ring may have (one every 0.1 degree over a full circle)."""
+MAX_RANGE = 1e6
+"""Longest sensing range (world units; keeps sums of readings far from overflow)."""
 
 
 @dataclass(frozen=True)
@@ -47,7 +49,7 @@ class SonarRing:
     Attributes:
         n_beams: number of sensors (1 to :data:`MAX_BEAMS`; 18 on the paper's LCAR robot).
         fov_deg: total field of view in degrees, in (0, 360].
-        max_range: sensing range ``R_max`` (world units, > 0).
+        max_range: sensing range ``R_max`` (world units, in ``(0, MAX_RANGE]``).
         noise_std: standard deviation of the Gaussian noise added to echoes
             (readings below ``max_range``), in ``[0, max_range]``; noisy readings
             are clipped to ``[0, max_range]``.
@@ -65,6 +67,7 @@ class SonarRing:
         require_int("SonarRing", "n_beams", self.n_beams, 1, MAX_BEAMS)
         require_in_range("SonarRing", "fov_deg", self.fov_deg, 1e-9, 360.0)
         require_positive("SonarRing", "max_range", self.max_range)
+        require_in_range("SonarRing", "max_range", self.max_range, 0.0, MAX_RANGE)
         require_in_range("SonarRing", "noise_std", self.noise_std, 0.0, self.max_range)
         require_in_range("SonarRing", "overlap", self.overlap, 1.0, 10.0)
 
@@ -155,6 +158,6 @@ def predict_scan(ring: SonarRing, ranges: np.ndarray, pose: np.ndarray,
         raise InputDataError(f"candidates must have shape (c, 3), got {candidates.shape}")
     cand = to_robot_frame(pose, candidates)
     mid = cand[:, :2] if midpoints is None else to_robot_frame(pose, midpoints)[:, :2]
-    return K.predict_scans(ranges, ring.angles, ring.spacing, float(ring.max_range),
-                           float(ring.overlap), np.ascontiguousarray(cand),
+    params = K.RingParams(float(ring.spacing), float(ring.max_range), float(ring.overlap))
+    return K.predict_scans(ranges, ring.angles, params, np.ascontiguousarray(cand),
                            np.ascontiguousarray(mid))

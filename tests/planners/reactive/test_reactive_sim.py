@@ -8,7 +8,7 @@ from itertools import combinations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
@@ -53,7 +53,7 @@ def _run(name: str, navigator: str, **kw):
 @pytest.mark.parametrize("name", PAPER_SCENARIOS)
 def test_fuzzy_reaches_the_goal_in_the_paper_scenarios(name):
     sc, run = _run(name, "fuzzy")
-    assert run.outcome == "success", run.summary()
+    assert run.outcome == Outcome.SUCCESS, run.summary()
     assert np.hypot(*(run.poses[-1, :2] - sc.goal)) <= run.goal_tolerance
     assert run.min_clearance > 0
 
@@ -65,7 +65,7 @@ def test_u_trap_needs_the_escape():
     # it never got past the bottom of the U (y = 7.1 inside, the goal is at y = 10)
     assert trapped.poses[:, 1].max() < 7.1
     _, escaped = _run("u-trap", "fuzzy")
-    assert escaped.outcome == "success", escaped.summary()
+    assert escaped.outcome == Outcome.SUCCESS, escaped.summary()
     assert np.any(escaped.escaping)
 
 
@@ -408,11 +408,10 @@ def test_run_figure_has_no_empty_panel(navigator, panels):
        gx=st.floats(0.5, 9.5), gy=st.floats(0.5, 9.5))
 def test_fuzzy_never_collides(x, y, th, gx, gy):
     world = paper_scenario("simple").world
-    if (not world.is_free((x, y)) or world.distance_to_obstacles((x, y)) < 0.3
-            or not world.is_free((gx, gy))):
-        return
+    assume(world.is_free((x, y)) and world.distance_to_obstacles((x, y)) >= 0.3
+           and world.is_free((gx, gy)))
     run = simulate(world, (x, y, th), (gx, gy), "fuzzy", params=_sim(max_steps=120))
-    assert run.outcome != "collision", run.summary()
+    assert run.outcome != Outcome.COLLISION, run.summary()
     assert run.min_clearance > 0
 
 

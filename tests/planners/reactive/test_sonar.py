@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.base.errors import InputDataError, ParameterError
@@ -49,8 +49,7 @@ def test_out_of_range_reads_max_range():
 @given(x=st.floats(0.3, 5.7), y=st.floats(0.3, 5.7), th=st.floats(-math.pi, math.pi))
 def test_every_echo_lies_on_a_wall_and_the_beam_before_it_is_free(x, y, th):
     pose = np.array([x, y, th])
-    if not CLUTTER.is_free(pose[:2]):
-        return
+    assume(CLUTTER.is_free(pose[:2]))
     ring = SonarRing(max_range=3.0)
     ranges = ring.scan(scene_edges(CLUTTER), pose)
     assert np.all((ranges >= 0) & (ranges <= 3.0))
@@ -138,6 +137,9 @@ def test_robot_frame_round_trip():
     ({"max_range": 0.0}, "max_range"), ({"max_range": -1.0}, "max_range"),
     ({"n_beams": 0}, "n_beams"), ({"fov_deg": 0.0}, "fov_deg"), ({"fov_deg": 400.0}, "fov_deg"),
     ({"noise_std": -0.1}, "noise_std"), ({"overlap": 0.5}, "overlap"),
+    ({"noise_std": 2.6}, "noise_std"), ({"n_beams": 3601}, "n_beams"),
+    ({"max_range": float("inf")}, "max_range"), ({"n_beams": 18.0}, "n_beams"),
+    ({"max_range": 1e7}, "max_range"),
 ])
 def test_bad_sonar_parameters_raise(kwargs, field):
     with pytest.raises(ParameterError, match=field):
