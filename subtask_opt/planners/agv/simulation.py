@@ -10,8 +10,10 @@ the paper. The cell is ``cell_m`` metres (0.2 m by default), which maps the
 sonar's 0.2-2 m range to 1-10 cells.
 
 **Route.** The AGV plans on its *routing map*: only ``00`` cells of the local
-map are routable (:mod:`.navigation`); a quadtree of that map answers every
-line-of-sight question and, when the AGV starts a new leg, checks the leg
+map are routable (:mod:`.navigation`); a quadtree of that map partitions the free
+space, gives the cost-to-go of the sub-goal choice (Dijkstra over its free
+leaves), answers every line-of-sight question and, when the AGV starts a new
+leg, checks the leg
 ahead against the AGV's current map (static obstacles it has learned) and
 reports seen obstacles standing in the leaves of that leg. Rules 1-5 (route
 sections), 2-1 ... 2-7 (corners, with the reading of the unreachable rules
@@ -120,8 +122,10 @@ class AgvParams:
         safety_distance: distance factor: a prediction closer than this is a conflict.
         collision_distance: centres closer than this collide (sum of body radii).
         cell_m: side of a cell in metres (maps the sonar range to cells).
-        sonar_min_m, sonar_max_m: sonar range (paper: 0.2 m - 2 m); obstacles
-            and check points are seen only in it.
+        sonar_min_m, sonar_max_m: sonar range (paper: 0.2 m - 2 m); check
+            points are measured only in it, obstacles are first seen within
+            ``sonar_max_m`` and stay tracked when they come closer than
+            ``sonar_min_m``.
         static_after_s: an obstacle standing in front this long becomes static.
         static_radius: cells whose centre lies within this of a static obstacle
             are blocked in the AGV's map.
@@ -944,7 +948,7 @@ def simulate(scenario: AgvScenario, *, seed: int | None = None,
     speeds = np.zeros(n_steps + 1)
     min_sep = math.inf
     outcome = Outcome.TIMEOUT
-    near_r, far_r = p.sonar_range
+    far_r = p.sonar_range[1]
     k = 0
     for k in range(n_steps + 1):
         t = times[k]
@@ -977,7 +981,9 @@ def simulate(scenario: AgvScenario, *, seed: int | None = None,
         seen = now - (agv.true - agv.pos)
         vel = (now - obs_traj[:, k - 1]) / p.dt if k else np.zeros_like(now)
         moving = np.hypot(vel[:, 0], vel[:, 1]) > 1e-9
-        in_range = (dist <= far_r) & (dist >= near_r)
+        # the sonar's near limit applies to check points: an obstacle that comes
+        # closer than it stays tracked (it was seen on its way in)
+        in_range = dist <= far_r
         if not agv.leg_checked:
             agv.leg_checked = True
             ids_all = np.flatnonzero(in_range)

@@ -130,3 +130,13 @@ def test_unreadable_and_empty_images(tmp_path):
         certainty_grid(np.full((10, 10), np.nan))
     with pytest.raises(InputDataError, match="shape"):
         certainty_grid(np.ones((10, 10, 2)))
+
+
+def test_oversize_images_are_refused_before_decoding(tmp_path):
+    from subtask_opt.planners.agv.certainty_grid import MAX_IMAGE_PIXELS
+
+    side = int(MAX_IMAGE_PIXELS ** 0.5) + 10
+    path = tmp_path / "huge.png"
+    Image.new("L", (side, side), 255).save(path)
+    with pytest.raises(InputDataError, match=f"at most {MAX_IMAGE_PIXELS}"):
+        certainty_grid(path)
