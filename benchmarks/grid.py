@@ -5,8 +5,13 @@ Run from the project root:  .venv/bin/python benchmarks/grid.py [--json OUT] [--
 * 512x512 distance fields (octile, chamfer 3/4) after warm-up;
 * the MDT on the six 14x9 maps: time per plan and length against the DT
   (its equality with brute-force line-of-sight Dijkstra is a unit test);
+* the MDT's two fills on the six maps: the thesis' level-by-level fill
+  against the exact Dijkstra fill (cells whose value differs, largest excess,
+  path lengths from the map's start, times);
 * the GA (improved default and the thesis' preset) over 20 seeds per map:
   successes, how many within 5 % of the MDT length, worst ratio, mean time;
+* a GA generation sweep (the thesis: "100 generations suffice"): success and
+  within-5 % counts after 10 ... 400 generations, for both presets;
 * VFF / VFH outcomes on the six maps and the trap;
 * every row of every MovingAI scenario file, plain (early-stopped) and
   focused octile transforms: mismatches, max |error|, seconds;
@@ -58,16 +63,81 @@ def mdt_figures(out):
     from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
 
     print("\n== MDT on the six 14x9 maps: time per plan (field + path), length vs DT ==")
+    nocut = dt.DTParams("chamfer34", corner_cutting=False)
     for name in THESIS_MAPS:
         c = thesis_case(name)
-        med, best = _timed(lambda c=c: dt.plan(c.world, c.start, c.goal,
-                                                params=dt.DTParams("anyangle")), 50)
-        mdt_len = dt.plan(c.world, c.start, c.goal, params=dt.DTParams("anyangle")).length
-        dt_len = dt.plan(c.world, c.start, c.goal).length
+        med, best = _timed(lambda c=c: dt.plan_mdt(c.world, c.start, c.goal), 50)
+        mdt_len = dt.plan_mdt(c.world, c.start, c.goal).length
+        dt_len = dt.plan_dt(c.world, c.start, c.goal).length
+        nocut_len = dt.plan_dt(c.world, c.start, c.goal, params=nocut).length
         print(f"{name:<10} median {med * 1e3:6.3f} ms  best {best * 1e3:6.3f} ms  "
-              f"MDT {mdt_len:.3f} <= DT {dt_len:.3f}: {mdt_len <= dt_len}")
+              f"MDT {mdt_len:.3f}  DT (corner cutting) {dt_len:.3f}  "
+              f"DT (no cutting) {nocut_len:.3f}")
         out.setdefault("mdt", []).append({"map": name, "median_s": med, "best_s": best,
-                                          "mdt_length": mdt_len, "dt_length": dt_len})
+                                          "mdt_length": mdt_len, "dt_length": dt_len,
+                                          "dt_nocut_length": nocut_len})
+
+
+def mdt_fill_figures(out):
+    from subtask_opt.planners.grid import distance_transform as dt
+    from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
+
+    print("\n== MDT fills: the thesis' level-by-level fill vs exact Dijkstra ==")
+    print("value: the field at the map's start; path: the length walked (exact: down the\n"
+          "field; levels: the thesis' step 5, to the visible cell of least value)")
+    print(f"{'map':<10} {'cells':>5} {'differ':>6} {'max excess':>10} {'exact':>8} "
+          f"{'lvl value':>9} {'lvl path':>8} {'exact ms':>8} {'level ms':>8}")
+    for name in THESIS_MAPS:
+        c = thesis_case(name)
+        exact = dt.distance_field(c.world, c.goal, "anyangle", fill="exact")
+        levels = dt.distance_field(c.world, c.goal, "anyangle", fill="levels")
+        ok = np.isfinite(exact)
+        excess = levels[ok] - exact[ok]
+        differ = int(np.count_nonzero(excess > 1e-9))
+        r_exact = dt.plan_mdt(c.world, c.start, c.goal)
+        r_levels = dt.plan_mdt(c.world, c.start, c.goal, params=dt.MDTParams("levels"))
+        t_exact, _ = _timed(lambda c=c: dt.plan_mdt(c.world, c.start, c.goal), 20)
+        t_levels, _ = _timed(lambda c=c: dt.plan_mdt(c.world, c.start, c.goal,
+                                                      params=dt.MDTParams("levels")), 20)
+        lvl_value = r_levels.info["field_value"]
+        print(f"{name:<10} {int(ok.sum()):>5} {differ:>6} {float(excess.max()):>10.4f} "
+              f"{r_exact.length:>8.4f} {lvl_value:>9.4f} {r_levels.length:>8.4f} "
+              f"{t_exact * 1e3:>8.3f} {t_levels * 1e3:>8.3f}")
+        out.setdefault("mdt_fill", []).append({
+            "map": name, "reachable_cells": int(ok.sum()), "cells_differ": differ,
+            "max_excess": float(excess.max()), "exact_path": r_exact.length,
+            "levels_value_at_start": lvl_value,
+            "levels_path": r_levels.length, "exact_s": t_exact, "levels_s": t_levels})
+
+
+def ga_sweep(out, seeds):
+    from subtask_opt.base.stop import MaxGenerations
+    from subtask_opt.planners.grid import distance_transform as dt
+    from subtask_opt.planners.grid import ga_path
+    from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
+
+    gens = (10, 25, 50, 100, 200, 400)
+    print(f"\n== GA generation sweep over {seeds} seeds x 6 maps: successes / within 5% of MDT ==")
+    print(f"{'preset':<9} " + " ".join(f"{g:>11}" for g in gens))
+    for label, params in (("improved", ga_path.GAPathParams()),
+                          ("paper", ga_path.GAPathParams.paper())):
+        cells = []
+        for g in gens:
+            ok = near = 0
+            for name in THESIS_MAPS:
+                c = thesis_case(name)
+                best = dt.plan_mdt(c.world, c.start, c.goal).length
+                for s in range(seeds):
+                    r = ga_path.plan(c.world, c.start, c.goal, params=params, seed=s,
+                                     stop=MaxGenerations(g))
+                    ok += r.success
+                    near += r.success and r.length <= 1.05 * best
+            total = seeds * len(THESIS_MAPS)
+            cells.append(f"{ok:>3}/{near:>3}/{total:<3}")
+            out.setdefault("ga_sweep", []).append({"preset": label, "generations": g,
+                                                   "success": ok, "within_5pct": near,
+                                                   "runs": total})
+        print(f"{label:<9} " + " ".join(f"{x:>11}" for x in cells))
 
 
 def ga_figures(out, seeds):
@@ -82,7 +152,7 @@ def ga_figures(out, seeds):
                           ("paper", ga_path.GAPathParams.paper())):
         for name in THESIS_MAPS:
             c = thesis_case(name)
-            best = dt.plan(c.world, c.start, c.goal, params=dt.DTParams("anyangle")).length
+            best = dt.plan_mdt(c.world, c.start, c.goal).length
             res = [ga_path.plan(c.world, c.start, c.goal, seed=s, params=params)
                    for s in range(seeds)]
             ok = sum(r.success for r in res)
@@ -106,10 +176,12 @@ def local_figures(out):
         c = thesis_case(name)
         for mod in (vff, vfh):
             r = mod.plan(c.world, c.start, c.goal)
-            what = f"reached, driven {r.info['driven_length']:.2f}" if r.success else r.message
+            what = (f"reached, driven {r.info['driven_length']:.2f}" if r.success
+                    else f"[{r.outcome}] {r.message}")
             print(f"{name:<10} {r.planner}: {what}")
             out.setdefault("local", []).append({"map": name, "planner": r.planner,
-                                                "success": r.success, "message": r.message})
+                                                "success": r.success,
+                                                "outcome": str(r.outcome), "message": r.message})
 
 
 def movingai_figures(out):
@@ -145,15 +217,22 @@ def main() -> int:
     ap.add_argument("--json", help="write all figures as JSON")
     ap.add_argument("--quick", action="store_true", help="skip the MovingAI full runs")
     ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--sweep-seeds", type=int, default=10, help="seeds per map in the GA sweep")
+    sections = {
+        "fields": field_times, "mdt": mdt_figures, "mdt-fill": mdt_fill_figures,
+        "ga": lambda o: ga_figures(o, args.seeds),
+        "ga-sweep": lambda o: ga_sweep(o, args.sweep_seeds),
+        "local": local_figures, "table": table, "movingai": movingai_figures,
+    }
+    ap.add_argument("--only", nargs="+", choices=list(sections), help="run these sections only")
     args = ap.parse_args()
     out: dict = {}
-    field_times(out)
-    mdt_figures(out)
-    ga_figures(out, args.seeds)
-    local_figures(out)
-    table(out)
-    if not args.quick:
-        movingai_figures(out)
+    for name, run in sections.items():
+        if args.only and name not in args.only:
+            continue
+        if name == "movingai" and args.quick and not args.only:
+            continue
+        run(out)
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=2, default=float))
     return 0

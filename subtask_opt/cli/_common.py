@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +33,12 @@ EXIT_FAILED = 1
 """The job ran and failed: no path, stall, collision, timeout, infeasible tour."""
 EXIT_BAD_INPUT = 2
 """A user mistake: bad option, unreadable or malformed input (one line on stderr)."""
+
+def failed(message: str) -> int:
+    """Report a job that ran and failed (one line on stderr); return :data:`EXIT_FAILED`."""
+    print(f"subtask-opt: failed: {' '.join(str(message).split())}", file=sys.stderr)
+    return EXIT_FAILED
+
 
 SEED_LIMIT = 2**63
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")

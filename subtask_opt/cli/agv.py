@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 
 from subtask_opt.cli._common import (
-    EXIT_FAILED,
     EXIT_OK,
     add_no_progress,
     add_outputs,
     animation_output,
+    failed,
     positive_int,
     seed,
 )
@@ -84,7 +84,9 @@ def _run_plan(args: argparse.Namespace) -> int:
         if args.animate:
             plots.animate_run(run, args.animate, max_frames=args.frames)
             print(f"animation written to {args.animate}")
-    return EXIT_OK if run.success else EXIT_FAILED
+    if not run.success:
+        return failed(f"the AGV run ended in {run.outcome.value}")
+    return EXIT_OK
 
 
 def _run_bench(args: argparse.Namespace) -> int:
@@ -104,4 +106,7 @@ def _run_bench(args: argparse.Namespace) -> int:
 
         plots.save_suite_figure(report, args.plot)
         print(f"figure written to {args.plot}")
-    return EXIT_OK if report.collisions + report.timeouts == 0 else EXIT_FAILED
+    if report.collisions + report.timeouts:
+        return failed(f"{report.collisions} collisions and {report.timeouts} timeouts in "
+                      f"{args.n} runs")
+    return EXIT_OK

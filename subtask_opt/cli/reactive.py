@@ -16,6 +16,7 @@ from subtask_opt.cli._common import (
     add_no_progress,
     add_outputs,
     animation_output,
+    failed,
     point,
     point3,
     positive_int,
@@ -158,7 +159,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         if args.animate:
             rplot.animate_run(world, run, args.animate, every=2,
                               progress=not args.no_progress)
-    return EXIT_OK if run.success else EXIT_FAILED
+    return EXIT_OK if run.success else failed(f"{run.outcome.value}: {run.message}")
 
 
 def _run_bench(args: argparse.Namespace) -> int:

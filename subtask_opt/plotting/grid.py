@@ -16,7 +16,8 @@ import numpy as np
 
 _COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
             "tab:pink", "tab:olive")
-_DASHES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1)), (0, (3, 1, 1, 1, 1, 1)))
+_DASHES = ("-", "--", "-.", (0, (5, 1, 1, 1)), (0, (3, 1, 1, 1, 1, 1)), (0, (8, 2)))
+"""Line styles of successful paths; a failed drive is always dotted."""
 MAX_FIGURE_INCHES = 10.0
 """The longer side of a single-map figure never exceeds this."""
 
@@ -73,7 +74,7 @@ def plot_grid(world: Any, results: Sequence[Any] = (), *, start: Any = None, goa
                     ms=3, lw=1.4 if big else 1.8, alpha=0.9,
                     label=f"{res.planner}: {res.length:.2f} cells, {res.turns} turns")
         else:
-            short = res.message.split(" (")[0].split(" at ")[0].split(" after ")[0]
+            short = res.message.split(" at (")[0].split(" after ")[0].split(" (")[0]
             traj = res.info.get("trajectory") if hasattr(res, "info") else None
             if traj:
                 t = np.asarray(traj, dtype=float) + shift

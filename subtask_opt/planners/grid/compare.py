@@ -22,6 +22,7 @@ from subtask_opt.planners.base import get_planner, planners
 from subtask_opt.planners.grid import distance_transform as dt
 from subtask_opt.planners.grid.world import GridWorld
 
+
 def planner_names() -> tuple[str, ...]:
     """Every registered grid planner, in registration order."""
     return tuple(planners("grid"))

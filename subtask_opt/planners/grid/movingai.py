@@ -16,10 +16,11 @@ from typing import Any
 
 import numpy as np
 
+from subtask_opt.base import files
 from subtask_opt.base.errors import InputDataError, require_int
 from subtask_opt.planners.grid import _kernels as K
 from subtask_opt.planners.grid.distance_transform import _weights
-from subtask_opt.planners.grid.world import MAX_SIDE, GridWorld, decode_text, read_file_bytes
+from subtask_opt.planners.grid.world import MAX_FILE_BYTES, MAX_SIDE, GridWorld
 
 #: |ours - optimal| above this is a mismatch (scenario files print 5 decimals).
 MISMATCH_TOL = 1e-3
@@ -59,7 +60,7 @@ def read_scenarios(path: str | Path) -> Scenarios:
             a negative or non-finite optimum.
     """
     path = Path(path)
-    text = decode_text(read_file_bytes(path, "scenario"), str(path))
+    text = files.read_text(path, "scenario file", max_bytes=MAX_FILE_BYTES)
     lines = text.splitlines()
     if not lines or lines[0].split()[:1] != ["version"]:
         first = lines[0][:40] if lines else ""

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from subtask_opt.base import files
 from subtask_opt.base.errors import (
     InputDataError,
     ParameterError,
@@ -180,12 +181,13 @@ class GridWorld:
                 :data:`MAX_FILE_BYTES` or :data:`MAX_SIDE` cells a side.
         """
         path = Path(path)
-        text = decode_text(read_file_bytes(path, "map"), str(path))
+        text = files.read_text(path, "map", max_bytes=MAX_FILE_BYTES)
         return cls(_movingai_occupancy(text, str(path)), 1.0, path.stem if name is None else name)
 
 
-MAX_FILE_BYTES = 64 * 2**20
-"""Map, image and scenario files larger than this (64 MiB) are refused."""
+MAX_FILE_BYTES = files.MAX_FILE_BYTES
+"""Map, image and scenario files larger than this (64 MiB, the package's one
+file limit, :data:`subtask_opt.base.files.MAX_FILE_BYTES`) are refused."""
 MAX_SIDE = 4096
 """Grids wider or taller than this many cells are refused when read from a file."""
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -226,6 +228,8 @@ def check_small_grid(world: GridWorld, max_free_cells: int, why: str) -> None:
 
 
 def read_file_bytes(path: Path, what: str) -> bytes:
+    """The bytes of ``path``, refusing files over :data:`MAX_FILE_BYTES` (the
+    byte-level twin of :func:`subtask_opt.base.files.read_text`, for PNG images)."""
     try:
         size = path.stat().st_size
         if size > MAX_FILE_BYTES:
@@ -239,8 +243,9 @@ def read_file_bytes(path: Path, what: str) -> bytes:
 
 
 def decode_text(data: bytes, source: str) -> str:
+    """UTF-8 text (a leading BOM dropped, as :func:`subtask_opt.base.files.read_text` does)."""
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputDataError(f"{source}: not a text file (byte {exc.start} is not UTF-8) "
                              f"and not a PNG image") from None

@@ -127,7 +127,7 @@ def test_from_movingai_malformed(tmp_path, text, match):
 
 
 def test_from_movingai_missing_file(tmp_path):
-    with pytest.raises(InputDataError, match="cannot read map"):
+    with pytest.raises(InputDataError, match="map not found"):
         GridWorld.from_movingai(tmp_path / "none.map")
 
 

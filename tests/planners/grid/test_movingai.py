@@ -77,10 +77,10 @@ def test_malformed_scenarios(tmp_path, text, match):
 
 
 def test_unreadable_scenarios(tmp_path):
-    with pytest.raises(InputDataError, match="cannot read scenario"):
+    with pytest.raises(InputDataError, match="scenario file not found"):
         read_scenarios(tmp_path / "missing.scen")
     (tmp_path / "bin.scen").write_bytes(b"\xff\xfe\x00")
-    with pytest.raises(InputDataError, match="not a text file"):
+    with pytest.raises(InputDataError, match="not UTF-8 text"):
         read_scenarios(tmp_path / "bin.scen")
 
 
