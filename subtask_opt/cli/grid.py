@@ -17,10 +17,10 @@ from pathlib import Path
 from typing import Any
 
 from subtask_opt.cli._common import (
-    EXIT_FAILED,
     EXIT_OK,
     add_no_progress,
     add_outputs,
+    failed,
     point,
     positive_float,
     positive_int,
@@ -167,7 +167,9 @@ def _run_plan(args: argparse.Namespace) -> int:
 
         save_grid_plot(args.plot, world, [report.result], start=report.start, goal=report.goal,
                        title=f"{world.name or Path(args.map).name}: {args.planner}")
-    return EXIT_OK if report.result.success else EXIT_FAILED
+    if not report.result.success:
+        return failed(f"{report.result.outcome.value}: {report.result.message}")
+    return EXIT_OK
 
 
 def _run_bench_grid(args: argparse.Namespace) -> int:
@@ -217,4 +219,6 @@ def _run_bench_movingai(args: argparse.Namespace) -> int:
         from subtask_opt.plotting.grid import save_movingai_figure
 
         save_movingai_figure(args.plot, world, scen, report)
-    return EXIT_OK if report.mismatches == 0 else EXIT_FAILED
+    if report.mismatches:
+        return failed(f"{report.mismatches} rows differ from the scenario file's optimum")
+    return EXIT_OK

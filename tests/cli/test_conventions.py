@@ -1,0 +1,128 @@
+"""One CLI convention for every command: exit 0 ok, 1 ran and failed, 2 bad input.
+
+Every stochastic command refuses a negative seed, every command with an input
+refuses a missing one, and every planning command that cannot reach its goal
+exits 1 - each with exactly one line on stderr and no traceback.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from subtask_opt import load_arm
+from subtask_opt.cli import main
+
+SEEDED = [
+    ["solve", "--case", "square20"],
+    ["tsp", "FILE"],
+    ["batch", "FILE", "--json", "OUT"],
+    ["plan", "grid", "--map", "open", "--planner", "ga"],
+    ["plan", "polygon", "--start", "20,20", "--goal", "320,320", "--planner", "pso"],
+    ["plan", "reactive", "--world", "simple"],
+    ["plan", "agv"],
+    ["bench", "grid"],
+    ["bench", "maklink"],
+    ["bench", "reactive"],
+    ["bench", "agv"],
+]
+
+MISSING = [
+    ["solve", "--case", "MISSING.csv"],
+    ["tsp", "MISSING.tsp"],
+    ["batch", "MISSING.csv", "--json", "OUT"],
+    ["plan", "grid", "--map", "MISSING.map"],
+    ["plan", "polygon", "--world", "MISSING.json", "--start", "1,1", "--goal", "2,2"],
+    ["plan", "reactive", "--world", "MISSING.json"],
+    ["plan", "agv", "--scenario", "MISSING.json"],
+    ["bench", "movingai", "--map", "MISSING.map", "--scen", "MISSING.scen"],
+    ["bench", "maklink", "--world", "MISSING.json"],
+]
+
+
+def _fill(argv: list[str], tmp_path) -> list[str]:
+    tsp = tmp_path / "tiny.tsp"
+    tsp.write_text("NAME: tiny\nTYPE: TSP\nDIMENSION: 4\nEDGE_WEIGHT_TYPE: EUC_2D\n"
+                   "NODE_COORD_SECTION\n1 0 0\n2 10 0\n3 10 10\n4 0 10\nEOF\n")
+    csv = tmp_path / "part.csv"
+    csv.write_text("x,y\n0.30,0.10\n0.35,0.22\n0.25,0.30\n")
+    out = []
+    for a in argv:
+        if a == "FILE":
+            a = str(tsp) if argv[0] == "tsp" else str(csv)
+        elif a == "OUT":
+            a = str(tmp_path / "out.json")
+        elif a.startswith("MISSING"):
+            a = str(tmp_path / a)
+        out.append(a)
+    return out
+
+
+def _one_line(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "Traceback" not in err
+    return err
+
+
+@pytest.mark.parametrize("argv", SEEDED, ids=lambda a: " ".join(a[:2]))
+def test_a_negative_seed_is_refused_in_one_line(argv, tmp_path, capsys):
+    assert main([*_fill(argv, tmp_path), "--seed", "-1"]) == 2
+    assert "seed" in _one_line(capsys)
+
+
+@pytest.mark.parametrize("argv", SEEDED, ids=lambda a: " ".join(a[:2]))
+def test_a_seed_of_two_to_the_63_is_refused(argv, tmp_path, capsys):
+    assert main([*_fill(argv, tmp_path), "--seed", str(2**63)]) == 2
+    assert "seed" in _one_line(capsys)
+
+
+@pytest.mark.parametrize("argv", MISSING, ids=lambda a: " ".join(a[:2]))
+def test_a_missing_input_is_refused_in_one_line(argv, tmp_path, capsys):
+    assert main(_fill(argv, tmp_path)) == 2
+    assert "MISSING" in _one_line(capsys)
+
+
+def test_solve_that_finds_no_tour_exits_1(tmp_path, capsys):
+    arm = load_arm("asr_twodof")
+    bx, by = arm.base_xy
+    r = 0.5 * (arm.r_min + arm.r_max)
+    csv = tmp_path / "disc.csv"  # every tour needs a straight line through the inner disc
+    csv.write_text(f"x,y\n{bx - r},{by}\n{bx + r},{by}\n{bx},{by + r}\n")
+    assert main(["solve", "--case", str(csv), "--robot", "asr_twodof", "--time-model",
+                 "line", "--line-fallback", "exclude"]) == 1
+    _one_line(capsys)
+
+
+def test_plan_grid_without_a_path_exits_1(tmp_path, capsys):
+    walled = tmp_path / "walled.txt"
+    walled.write_text(".....\n..@@@\n..@..\n..@@@\n.....\n")
+    assert main(["plan", "grid", "--map", str(walled), "--start", "0,0", "--goal", "3,2",
+                 "--planner", "dt"]) == 1
+    _one_line(capsys)
+
+
+def test_plan_polygon_without_a_path_exits_1(tmp_path, capsys):
+    world = tmp_path / "pocket.json"
+    world.write_text(json.dumps({"bounds": [0, 0, 10, 10],
+                                 "obstacles": [[[6, 6], [10, 6], [6, 10]]]}))
+    assert main(["plan", "polygon", "--world", str(world), "--start", "1,1", "--goal",
+                 "9.5,9.5", "--planner", "visibility"]) == 1
+    _one_line(capsys)
+
+
+def test_plan_reactive_that_stalls_exits_1(capsys):
+    assert main(["plan", "reactive", "--world", "u-trap", "--navigator", "fuzzy-no-escape"]) == 1
+    _one_line(capsys)
+
+
+def test_plan_agv_that_collides_exits_1(capsys):
+    assert main(["plan", "agv", "--scenario", "2-3", "--no-collision-check"]) == 1
+    _one_line(capsys)
+
+
+def test_batch_with_a_failed_job_exits_1(tmp_path, capsys):
+    bad = tmp_path / "far.csv"
+    bad.write_text("x,y\n0.30,0.10\n0.35,0.22\n9.0,9.0\n")
+    assert main(["batch", str(bad), "--json", str(tmp_path / "b.json"), "--workers", "0"]) == 1
