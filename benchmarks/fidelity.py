@@ -16,6 +16,12 @@ on the same instance; for the Cartesian models also the share of the tour's
 legs whose straight line, driven at the model's Cartesian trapezoid, would
 exceed a joint limit (impossible line or a joint speed above its limit).
 
+Jerk limits are on wherever the robot has them (planar_2r: 100 and 150 rad/s^3;
+asr_twodof has none): joint moves and straight lines are jerk-limited, the
+``line`` model times its lines that way, and the validator checks the jerk by
+finite differences (column "jerk": the largest |jerk| / limit, "-" when the
+robot has no jerk limits).
+
     python benchmarks/fidelity.py [--instances 10] [--seed 0] [--json out/fidelity.json]
 """
 
@@ -60,6 +66,8 @@ def run_instance(robot: str, case: str, instance: int, seed: int, arm) -> list[d
             "robot": robot, "case": case, "instance": instance, "model": model,
             "predicted_s": result.total_time, "executed_s": trajectory.duration,
             "valid": report.ok, "violations": list(report.violations),
+            "max_jerk_ratio": (None if report.max_jerk_ratio is None
+                               else max(report.max_jerk_ratio)),
             "elbow_changes": result.report.configuration_changes,
             "joint_moves": sum(leg.kind == "joint" for leg in trajectory.legs),
         }
@@ -94,6 +102,8 @@ def summarise(rows: list[dict]) -> list[dict]:
                     "vs_best": statistics.mean(r["vs_best"] for r in sel),
                     "fastest": sum(r["vs_best"] == 1.0 for r in sel),
                     "valid": sum(r["valid"] for r in sel),
+                    "max_jerk_ratio": (None if sel[0]["max_jerk_ratio"] is None
+                                       else max(r["max_jerk_ratio"] for r in sel)),
                 }
                 if "share_impossible" in sel[0]:
                     entry["share_impossible"] = statistics.mean(r["share_impossible"]
@@ -109,12 +119,13 @@ def summarise(rows: list[dict]) -> list[dict]:
 
 def print_table(table: list[dict]) -> None:
     head = (f"{'robot':<11} {'case':<9} {'model':<9} {'n':>3} {'predicted':>10} {'executed':>10} "
-            f"{'exec/pred':>9} {'vs best':>8} {'fastest':>7} {'valid':>5}  "
+            f"{'exec/pred':>9} {'vs best':>8} {'fastest':>7} {'valid':>5} {'jerk':>6}  "
             f"{'tour legs past a joint limit (impossible + overspeed)':<40}")
     print(head)
     print("-" * len(head))
     for e in table:
         share = ""
+        jerk = "-" if e["max_jerk_ratio"] is None else f"{e['max_jerk_ratio']:.3f}"
         if "share_impossible" in e:
             share = (f"{100 * (e['share_impossible'] + e['share_overspeed']):5.1f}% "
                      f"({100 * e['share_impossible']:.1f}% + {100 * e['share_overspeed']:.1f}%);"
@@ -123,7 +134,7 @@ def print_table(table: list[dict]) -> None:
         print(f"{e['robot']:<11} {e['case']:<9} {e['model']:<9} {e['instances']:>3} "
               f"{e['predicted_s']:>9.3f}s {e['executed_s']:>9.3f}s "
               f"{e['executed_over_predicted']:>9.3f} {e['vs_best']:>8.3f} "
-              f"{e['fastest']:>7} {e['valid']:>5}  {share}")
+              f"{e['fastest']:>7} {e['valid']:>5} {jerk:>6}  {share}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -150,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     print_table(table)
     invalid = [r for r in rows if not r["valid"]]
     print(f"trajectories validated: {len(rows) - len(invalid)} of {len(rows)} within all "
-          "joint limits")
+          "joint limits (position, velocity, acceleration; jerk where the robot has limits)")
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps({"table": table, "runs": rows}, indent=1))

@@ -417,11 +417,11 @@ def validate_trajectory(trajectory: TourTrajectory, *, dt: float = 1e-3,
                lambda s, a: f"|dq{a + 1}| = {vr[s, a]:.6g} x limit"),
               ("acceleration", t, ar > 1 + rtol,
                lambda s, a: f"|ddq{a + 1}| = {ar[s, a]:.6g} x limit")]
-    jerk_ratio = None
+    jerk_ratio: tuple[float, float] | None = None
     if jl.jerk is not None and len(grid) > 1:
         on_grid = np.isin(t, grid)
         jr = np.abs(np.diff(qdd[on_grid], axis=0)) / np.diff(t[on_grid])[:, None] / jl.jerk
-        jerk_ratio = tuple(float(v) for v in jr.max(axis=0))
+        jerk_ratio = (float(jr[:, 0].max()), float(jr[:, 1].max()))
         checks.append(("jerk", t[on_grid], jr > 1 + jtol,
                        lambda s, a: f"|dddq{a + 1}| = {jr[s, a]:.6g} x limit by finite "
                                     f"differences at dt = {dt:g} s"))

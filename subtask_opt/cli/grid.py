@@ -168,7 +168,7 @@ def _run_plan(args: argparse.Namespace) -> int:
         save_grid_plot(args.plot, world, [report.result], start=report.start, goal=report.goal,
                        title=f"{world.name or Path(args.map).name}: {args.planner}")
     if not report.result.success:
-        return failed(f"{report.result.outcome.value}: {report.result.message}")
+        return failed(f"{report.result.outcome}: {report.result.message}")
     return EXIT_OK
 
 

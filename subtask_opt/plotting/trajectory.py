@@ -30,7 +30,10 @@ if TYPE_CHECKING:
 
 def plot_joint_profiles(trajectory: TourTrajectory, *, dt: float = 0.005,
                         fig: Figure | None = None) -> Figure:
-    """Three stacked panels: q, q_dot, q_ddot of both joints over the tour, limits dashed."""
+    """Three stacked panels: q, q_dot, q_ddot of both joints over the tour, limits dashed.
+
+    ``dt`` is the sampling step (s), in the range of :meth:`TourTrajectory.sample`.
+    """
     import matplotlib.pyplot as plt
 
     s = trajectory.sample(dt)
@@ -51,12 +54,19 @@ def plot_joint_profiles(trajectory: TourTrajectory, *, dt: float = 0.005,
         for leg in trajectory.legs:
             if leg.kind == "line":
                 ax.axvspan(leg.start, leg.start + leg.duration, color="0.9", lw=0, zorder=0)
-    axes[0].legend(loc="upper right", fontsize=8)
-    axes[0].set_title(f"{trajectory.arm.name}: executed tour, {trajectory.duration:.3f} s "
-                      "(grey: straight-line legs)")
+    axes[0].plot([], [], color="0.3", ls="--", lw=0.7, label="limits")
+    axes[0].fill_between([], [], color="0.9", label="straight-line leg")
+    axes[0].legend(loc="upper right", fontsize=8, ncol=4)
+    axes[0].set_title(_title(trajectory))
     axes[2].set_xlabel("t [s]")
     fig.tight_layout()
     return fig
+
+
+def _title(trajectory: TourTrajectory) -> str:
+    """Robot, time model, N and the executed (and predicted) tour time."""
+    return (f"{trajectory.arm.name}, {trajectory.time_model} model, N = {len(trajectory.legs)}: "
+            f"executed {trajectory.duration:.3f} s (predicted {trajectory.predicted_time:.3f} s)")
 
 
 def plot_executed_path(problem: SequencingProblem, trajectory: TourTrajectory, *,
@@ -65,9 +75,9 @@ def plot_executed_path(problem: SequencingProblem, trajectory: TourTrajectory, *
     import matplotlib.pyplot as plt
 
     if ax is None:
-        _, ax = plt.subplots(figsize=(6, 6))
+        _, ax = plt.subplots(figsize=(7, 6))
     arm = trajectory.arm
-    plot_workspace(ax, arm)
+    plot_workspace(ax, arm, label=False)
     for leg in trajectory.legs:
         t = np.arange(0.0, leg.duration + dt, dt)
         q, _, _ = leg.states(t)
@@ -76,7 +86,8 @@ def plot_executed_path(problem: SequencingProblem, trajectory: TourTrajectory, *
         colour = "tab:red" if leg.from_config == leg.to_config else "tab:purple"
         ax.plot(xy[:, 0], xy[:, 1], style, color=colour, lw=1.2, zorder=3)
     pts = problem.subtasks.points
-    ax.scatter(pts[:, 0], pts[:, 1], s=24, color="k", zorder=5)
+    ax.scatter(pts[:, 0], pts[:, 1], s=24, color="k", zorder=5, label="subtask")
+    ax.fill([], [], color="tab:blue", alpha=0.12, label="reachable within joint limits")
     ax.plot([], [], "-", color="tab:red", label="straight line")
     ax.plot([], [], "--", color="tab:red", label="joint move")
     ax.plot([], [], "--", color="tab:purple", label="joint move, elbow change")
@@ -84,7 +95,7 @@ def plot_executed_path(problem: SequencingProblem, trajectory: TourTrajectory, *
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(f"executed tour ({trajectory.time_model} model), {trajectory.duration:.3f} s")
+    ax.set_title("executed tour: " + _title(trajectory), fontsize=10)
     return ax
 
 
@@ -117,18 +128,20 @@ def animate_tour(problem: SequencingProblem, trajectory: TourTrajectory, path: s
     t = np.linspace(0.0, trajectory.duration, n_frames)
     q, _, _ = trajectory.states(t)
     links = np.array([arm.link_points(qk) for qk in q])  # (T, 3, 2)
-    fig = Figure(figsize=(5, 5))
+    fig = Figure(figsize=(5.5, 5.5))
     ax = fig.add_subplot()
-    plot_workspace(ax, arm)
+    plot_workspace(ax, arm, resolution=200)
     pts = problem.subtasks.points
-    ax.scatter(pts[:, 0], pts[:, 1], s=20, color="k", zorder=5)
-    trail, = ax.plot([], [], "-", color="tab:red", lw=1.2, zorder=3)
-    body, = ax.plot([], [], "o-", color="0.25", lw=3, ms=5, zorder=6)
+    ax.scatter(pts[:, 0], pts[:, 1], s=20, color="k", zorder=5, label="subtask")
+    trail, = ax.plot([], [], "-", color="tab:red", lw=1.2, zorder=3, label="tip path so far")
+    body, = ax.plot([], [], "o-", color="0.25", lw=3, ms=5, zorder=6, label="arm")
     label = ax.text(0.02, 0.97, "", transform=ax.transAxes, va="top", fontsize=9)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(f"{arm.name}, {trajectory.time_model} model tour")
+    ax.legend(loc="lower right", fontsize=7)
+    ax.set_title(_title(trajectory), fontsize=8)
+    fig.tight_layout()
 
     def draw(k: int):
         trail.set_data(links[: k + 1, 2, 0], links[: k + 1, 2, 1])

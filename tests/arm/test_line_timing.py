@@ -42,7 +42,7 @@ def _slack_joints(name: str, kw: float = 1e6):
     arm = _arm(name)
     jl = arm.joint_limits
     cl = arm.cartesian_limits
-    return load_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, [1e7, 1e7], [1e7, 1e7]),
+    return load_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, [1e6, 1e6], [1e6, 1e6]),
                     cartesian_limits=CartesianLimits(cl.kv, cl.ka, kw, kw))
 
 
@@ -245,3 +245,38 @@ def test_line_limits_reject_a_bad_grid() -> None:
 
     with pytest.raises(ParameterError, match="grid"):
         line_limits(_arm("planar_2r"), 8)
+
+
+def test_jerk_limited_line_picks_a_near_best_averaging_width() -> None:
+    # oracle: the same smoothed family measured exactly on a fine grid of widths
+    from subtask_opt.arm.timing import _line_kernels as lk
+    from subtask_opt.arm.timing.models import line_limits
+
+    arm = _arm("planar_2r")
+    lim = line_limits(arm)
+    s = random_subtasks(arm, 6, seed=3)
+    q = arm.ik(s.points)
+    ratios = []
+    for i in range(6):
+        for j in range(i + 1, 6):
+            for c in range(2):
+                if np.isnan(q[i, c, 0]) or np.isnan(q[j, c, 0]):
+                    continue
+                a, b = s.points[i].copy(), s.points[j].copy()
+                st, sg, qs, der = lk.line_geometry(arm.kinematics, a, b, c, q[i, c].copy(),
+                                                   q[j, c].copy(), lim.grid)
+                if st != lk.LINE_OK:
+                    continue
+                ok, x, w, t1 = lk.topp_profile(der, sg, lim.vel, lim.acc, lim.kv, lim.ka,
+                                               lim.kw, lim.kw_dot)
+                assert ok
+                chosen = lk.line_profile(arm.kinematics, a, b, c, q[i, c].copy(),
+                                         q[j, c].copy(), lim)[7]
+                tk, sk = lk.profile_knots(sg, x, w)
+                u = (b - a) / np.linalg.norm(b - a)
+                best = min(lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, qs, der, x, w, tk,
+                                        sk, tau, lim, True) * (t1 + tau)
+                           for tau in t1 * np.geomspace(1e-3, 2.0, 120))
+                ratios.append(chosen / best)
+    assert len(ratios) >= 8
+    assert max(ratios) < 1.05

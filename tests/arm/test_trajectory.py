@@ -234,3 +234,78 @@ def test_figures_and_animation(tmp_path) -> None:
         animate_tour(problem, trajectory, tmp_path / "nowhere" / "tour.gif")
     with pytest.raises(ParameterError, match="fps"):
         animate_tour(problem, trajectory, tmp_path / "t.gif", fps=0)
+
+
+def test_reachable_region_comes_from_the_joint_limits() -> None:
+    from subtask_opt.plotting.sequencing import reachable_raster
+
+    arm = _arm("planar_2r")
+    jl = arm.joint_limits
+    # brute force over the joint box: the closest tip position to the base
+    q1, q2 = np.meshgrid(np.linspace(jl.lower[0], jl.upper[0], 181),
+                         np.linspace(jl.lower[1], jl.upper[1], 721))
+    tips = np.array([arm.fk(q)[:2] for q in np.column_stack([q1.ravel(), q2.ravel()])[::37]])
+    r_true = float(np.hypot(*tips.T).min())
+    assert r_true > 3 * arm.r_min  # the joint limits cut far more than |L1 - L2|
+    gx, gy, mask = reachable_raster(arm, (-0.65, 0.65, -0.65, 0.65), 261)
+    r = np.hypot(gx, gy)
+    assert not mask[r < 0.97 * r_true].any()
+    assert mask[(r > 1.05 * r_true) & (r < 0.5) & (gx > 0)].all()
+
+
+def test_tour_legs_follow_the_arm() -> None:
+    from subtask_opt.plotting.sequencing import tour_legs
+
+    arm = _arm("planar_2r")
+    problem, result = _solved("planar_2r", "random30", "joint")
+    configs = result.report.configurations
+    legs = tour_legs(problem, result.order, configs, samples=49)
+    pts = problem.subtasks.points
+    assert [leg.start for leg in legs] == [int(i) for i in result.order]
+    for leg in legs:
+        np.testing.assert_allclose(leg.xy[0], pts[leg.start], atol=1e-9)
+        np.testing.assert_allclose(leg.xy[-1], pts[leg.end], atol=1e-9)
+        # a joint move's tip path is the FK (Pinocchio) of the joint interpolation
+        qa = arm.ik(pts[leg.start])[configs[leg.start]]
+        qb = arm.ik(pts[leg.end])[configs[leg.end]]
+        np.testing.assert_allclose(leg.xy[24], arm.fk((qa + qb) / 2)[:2], atol=1e-9)
+        assert leg.kind == ("joint" if configs[leg.start] == configs[leg.end] else "elbow")
+    # the trapezoid model's legs are straight, and its impossible lines are marked
+    trap, trap_result = _solved("planar_2r", "random30", "trapezoid")
+    legs = tour_legs(trap, trap_result.order)
+    for leg in legs:
+        a, b = pts[leg.start], pts[leg.end]
+        cross = (leg.xy - a) @ np.array([-(b - a)[1], (b - a)[0]])
+        assert np.abs(cross).max() < 1e-12
+    bad = {(leg.start, leg.end) for leg in legs if leg.infeasible}
+    expected = {(leg.start, leg.end) for leg in trap_result.report.infeasible}
+    assert bad == expected
+
+
+@pytest.mark.parametrize("n", [8, 45])
+def test_solution_figure(tmp_path, n: int) -> None:
+    import matplotlib.pyplot as plt
+
+    from subtask_opt.plotting.sequencing import save_solution_figure, solution_figure
+
+    arm = _arm("planar_2r")
+    problem = SequencingProblem(random_subtasks(arm, n, seed=2), arm, time_model="joint",
+                                configurations="optimize")
+    result = solve(problem, seed=0)
+    fig = solution_figure(result, problem)
+    tour_ax = fig.axes[0]
+    assert tour_ax.get_xlabel() == "x [m]" and tour_ax.get_ylabel() == "y [m]"
+    assert f"N = {n}" in tour_ax.get_title() and "joint model" in tour_ax.get_title()
+    assert "planar_2r" in fig.get_suptitle()
+    numbers = [t.get_text() for t in tour_ax.texts if t.get_text()]  # not the arrows
+    if n <= 40:  # legs numbered on the map
+        assert sorted(numbers, key=int) == [str(k) for k in range(1, n + 1)]
+    else:  # the order in a side table instead
+        assert numbers == []
+        table = [t.get_text() for ax in fig.axes for t in ax.texts if ":" in t.get_text()]
+        assert len(table) == n
+    conv = [ax for ax in fig.axes if ax.get_xlabel() == "generation"]
+    assert len(conv) == 1 and conv[0].get_yscale() == "log"
+    plt.close(fig)
+    out = save_solution_figure(result, problem, tmp_path / "fig.png")
+    assert out.read_bytes()[:4] == b"\x89PNG"

@@ -22,6 +22,17 @@ reachability analysis, in closed form because there is one path coordinate):
 1. backward: the largest controllable ``x`` at each grid point, from ``x_M = 0``;
 2. forward: from ``x_0 = 0``, the largest ``w`` that stays controllable.
 
+With joint jerk limits (:class:`LineLimits` ``has_jerk``) that profile has
+acceleration steps, so :func:`line_profile` drives instead its moving average
+over a window tau, ``f(t) = (1/tau) * integral of s over [t - tau, t]``: still
+rest to rest and on the line, now with continuous acceleration and bounded
+jerk ``f3 = (s_ddot(t) - s_ddot(t - tau)) / tau``; the joint jerk is
+``q' f3 + 3 q'' f1 f2 + q3 f1**3`` (f1, f2 the path speed and acceleration,
+q3 the third path derivative of the joints). Stretching time by lambda divides
+velocities, accelerations and jerks by lambda, lambda**2 and lambda**3, so the
+smallest lambda that meets every limit follows from the largest ratios; tau is
+searched to minimise the duration lambda (T + tau).
+
 ``status`` codes: 0 feasible, 1 the line leaves the reachable annulus (inner
 disc or beyond the reach), 2 it passes a joint limit (or arrives at another
 representative of the goal configuration), 3 it passes a singularity where the
@@ -292,7 +303,9 @@ class LineLimits(NamedTuple):
     and slowed down uniformly until every limit holds (:func:`line_profile`);
     tau is searched on ``n_tau`` log-spaced values in
     [``tau_min``, ``tau_max``] x (unsmoothed duration), refined by
-    ``n_golden`` golden-section steps. ``margin`` is the relative slack added
+    ``n_golden`` golden-section steps, each candidate judged at ``n_search``
+    evenly spaced instants with interpolated path derivatives; the chosen
+    profile is then measured exactly. ``margin`` is the relative slack added
     to the slow-down factor (covers the limits between the checked instants).
     """
 
@@ -307,6 +320,7 @@ class LineLimits(NamedTuple):
     grid: int
     n_tau: int
     n_golden: int
+    n_search: int
     tau_min: float
     tau_max: float
     margin: float
@@ -429,10 +443,19 @@ def _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim, exac
     lambda^2 and jerks by lambda^3, so the factor is the max over the checked
     instants of (velocity ratio, sqrt(acceleration ratio), cbrt(jerk ratio)).
     ``exact``: derivatives by IK at three instants per piece of the profile
-    (:func:`_sample_times`), else interpolated on the grid at one instant per piece.
+    (:func:`_sample_times`), else interpolated on the grid at ``lim.n_search``
+    evenly spaced instants (to compare candidate widths quickly) when they are
+    at most tau / 3 apart (every feature of the smoothed jerk is at least tau
+    wide), at the middle of every piece of the profile otherwise.
     """
     m = w.shape[0]
-    times = _sample_times(tk, tau, exact)
+    end = tk[m] + tau
+    if exact:
+        times = _sample_times(tk, tau, True)
+    elif 3.0 * end > tau * lim.n_search:  # the jerk's features (>= tau wide) need more
+        times = _sample_times(tk, tau, False)
+    else:
+        times = (np.arange(lim.n_search) + 0.5) * (end / lim.n_search)
     dr = np.empty(N_DER)
     tmp = np.empty(2)
     ia = 0
@@ -466,25 +489,34 @@ def _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim, exac
 def _smoothing(kin, p0, ux, uy, branch, sg, qs, der, x, w, lim):
     """(tau, lambda): the averaging width and time stretch of the fastest smoothed profile.
 
-    The duration lambda (T + tau) is minimised over tau on a log grid, refined by a
-    golden-section search on log tau; lambda is then measured with exact derivatives.
+    The duration lambda (T + tau) is minimised over tau on a log grid (plus a
+    cluster around tau = T), refined by a golden-section search on log tau
+    around the best; lambda is then measured with exact derivatives.
     """
     tk, sk = profile_knots(sg, x, w)
     t1 = tk[tk.shape[0] - 1]
     lo = math.log(lim.tau_min * t1)
     hi = math.log(lim.tau_max * t1)
-    logs = np.empty(lim.n_tau)
-    costs = np.empty(lim.n_tau)
-    best = 0
+    # log-spaced widths, plus a linear cluster around tau = T, where the cost has a
+    # narrow dip (the window then spans the whole acceleration-limited profile)
+    n_near = lim.n_tau // 2
+    n_all = lim.n_tau + n_near
+    logs = np.empty(n_all)
     for k in range(lim.n_tau):
         logs[k] = lo + (hi - lo) * k / (lim.n_tau - 1)
+    for k in range(n_near):
+        logs[lim.n_tau + k] = math.log(t1 * (0.8 + 0.4 * k / max(n_near - 1, 1)))
+    logs = np.sort(logs)
+    costs = np.empty(n_all)
+    best = 0
+    for k in range(n_all):
         tau = math.exp(logs[k])
         costs[k] = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim,
                              False) * (t1 + tau)
         if costs[k] < costs[best]:
             best = k
     a = logs[max(best - 1, 0)]
-    b = logs[min(best + 1, lim.n_tau - 1)]
+    b = logs[min(best + 1, n_all - 1)]
     best_log = logs[best]
     best_cost = costs[best]
     ratio = 0.5 * (math.sqrt(5.0) - 1.0)
@@ -507,8 +539,17 @@ def _smoothing(kin, p0, ux, uy, branch, sg, qs, der, x, w, lim):
             b = e
         else:
             a = c
+    # the estimates can be fooled by narrow jerk spikes: measure the refined width and
+    # the three best grid widths exactly and keep the fastest
     tau = math.exp(best_log)
     lam = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, tau, lim, True)
+    ranked = np.argsort(costs)
+    for r in range(min(3, n_all)):
+        cand = math.exp(logs[ranked[r]])
+        lc = _slowdown(kin, p0, ux, uy, branch, sg, qs, der, x, w, tk, sk, cand, lim, True)
+        if lc * (t1 + cand) < lam * (t1 + tau):
+            tau = cand
+            lam = lc
     return tau, lam * (1.0 + lim.margin)
 
 

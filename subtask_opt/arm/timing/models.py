@@ -25,7 +25,13 @@ Four models (:data:`TIME_MODELS`):
     cannot follow (through the inner disc, past a joint limit, through a
     singularity, or between different elbow branches) is replaced by a joint
     move (``line_fallback="joint"``, the default) or excluded
-    (``line_fallback="exclude"``: infinite time).
+    (``line_fallback="exclude"``: infinite time). When the arm has joint jerk
+    limits the line is driven jerk-limited: the acceleration-limited optimum
+    averaged over a window of width tau (continuous acceleration) and slowed
+    down uniformly by lambda until every velocity, acceleration and jerk limit
+    holds; its time lambda (T + tau), with tau searched per leg, is exactly what
+    :func:`subtask_opt.arm.trajectory.tour_trajectory` executes. Not the
+    jerk-limited optimum, but a feasible profile and its honest time.
 
 For ``joint`` and ``line`` the result also holds the times between every pair
 of *configurations* (:attr:`TimingResult.branch_times`), from which
@@ -181,6 +187,17 @@ class LegCheck:
 class TimingResult:
     """Output of :func:`travel_times`.
 
+    Which optional fields a model fills (the others are None / defaults)::
+
+        model       leg_check   branch_times/moves/joints   line_status/fallback/grid
+        paper       yes (1)     -                           -
+        trapezoid   yes (1)     -                           -
+        joint       -           yes                         -
+        line        -           yes                         yes
+
+    (1) unless ``check_legs=False``. ``matrix``, ``model``, ``configurations``,
+    ``joint_positions`` and ``tool_angles`` are always set by :func:`travel_times`.
+
     Attributes:
         matrix: (N, N) minimum rest-to-rest travel times (s), symmetric, zero
             diagonal, for the elbow branches in ``configurations`` (inf for a
@@ -296,7 +313,8 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
         line_fallback: (``line``) ``"joint"`` drives an infeasible line as a
             joint move, ``"exclude"`` gives it an infinite time.
         line_grid: (``line``) intervals of the path discretisation (>= 16);
-            the time converges from above as 1/line_grid (512: within 0.3%).
+            without jerk limits the time converges from above as 1/line_grid
+            (512: within 0.3%).
 
     Raises:
         ParameterError: unknown model, bad k, elbow, n_samples, line_fallback
@@ -360,10 +378,12 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
 
 
 # Search settings of the jerk-limited line (see :class:`_line_kernels.LineLimits`):
-# averaging widths from 1e-3 to 2 x the acceleration-limited duration, 12 log-spaced
-# values refined by 10 golden-section steps; the stretch factor gets 1e-4 of slack.
+# averaging widths from 1e-3 to 2 x the acceleration-limited duration (20 log-spaced,
+# plus 10 in [0.8, 1.2] x that duration), refined by 10 golden-section steps, each
+# judged at 256 instants; the refined and the 3 best widths are measured exactly; the
+# stretch factor gets 1e-4 of slack.
 _TAU_RANGE = (1e-3, 2.0)
-_N_TAU, _N_GOLDEN = 12, 10
+_N_TAU, _N_GOLDEN, _N_SEARCH = 20, 10, 256
 _LINE_MARGIN = 1e-4
 
 
@@ -380,8 +400,8 @@ def line_limits(arm: Arm, grid: int = 512) -> _lk.LineLimits:
     return _lk.LineLimits(np.array(jl.velocity, dtype=np.float64),
                           np.array(jl.acceleration, dtype=np.float64), jerk,
                           float(cl.kv), float(cl.ka), float(cl.kw), float(cl.kw_dot),
-                          jl.jerk is not None, int(grid), _N_TAU, _N_GOLDEN, _TAU_RANGE[0],
-                          _TAU_RANGE[1], _LINE_MARGIN)
+                          jl.jerk is not None, int(grid), _N_TAU, _N_GOLDEN, _N_SEARCH,
+                          _TAU_RANGE[0], _TAU_RANGE[1], _LINE_MARGIN)
 
 
 def _branch_tensors(points: np.ndarray, q_both: np.ndarray, arm: Arm, model: str,
