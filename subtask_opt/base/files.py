@@ -11,11 +11,14 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from subtask_opt.base.errors import InputDataError
 
@@ -49,26 +52,20 @@ def read_text(path: str | Path, what: str, *, max_bytes: int = MAX_FILE_BYTES) -
         raise InputDataError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
 
 
+_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+
+
 def json_depth(text: str) -> int:
-    """The deepest ``[``/``{`` nesting of a JSON text (brackets inside strings ignored)."""
-    depth = deepest = 0
-    in_string = escaped = False
-    for ch in text:
-        if in_string:
-            if escaped:
-                escaped = False
-            elif ch == "\\":
-                escaped = True
-            elif ch == '"':
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch in "[{":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif ch in "]}":
-            depth -= 1
-    return deepest
+    """The deepest ``[``/``{`` nesting of a JSON text (brackets inside strings ignored).
+
+    Runs on the raw text before parsing (vectorised), so a deeply nested file
+    cannot exhaust the parser's recursion.
+    """
+    stripped = _JSON_STRING.sub('""', text).encode("utf-8", "replace")
+    codes = np.frombuffer(stripped, dtype=np.uint8)
+    step = ((codes == ord("[")) | (codes == ord("{"))).astype(np.int64) - (
+        (codes == ord("]")) | (codes == ord("}")))
+    return int(max(np.max(np.cumsum(step), initial=0), 0))
 
 
 def _finite_float(text: str) -> float:
@@ -81,7 +78,7 @@ def _finite_float(text: str) -> float:
 
 
 def _reject_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a number")
+    raise ValueError(f"{name} is not a finite number")
 
 
 def parse_json(text: str, where: str, *, max_depth: int = MAX_JSON_DEPTH) -> Any:
@@ -89,14 +86,15 @@ def parse_json(text: str, where: str, *, max_depth: int = MAX_JSON_DEPTH) -> Any
     of at most :data:`MAX_NUMBER_CHARS` digits; NaN and Infinity are refused."""
     depth = json_depth(text)
     if depth > max_depth:
-        raise InputDataError(f"{where}: JSON nested {depth} deep; the limit is {max_depth}")
+        raise InputDataError(f"{where}: brackets nested {depth} deep, deeper than the "
+                             f"limit of {max_depth}")
     try:
         return json.loads(text, parse_float=_finite_float, parse_int=_checked_int,
                           parse_constant=_reject_constant)
     except json.JSONDecodeError as exc:
-        raise InputDataError(f"{where}, line {exc.lineno}: invalid JSON ({exc.msg})") from None
+        raise InputDataError(f"{where}, line {exc.lineno}: not valid JSON ({exc.msg})") from None
     except (ValueError, RecursionError) as exc:
-        raise InputDataError(f"{where}: invalid JSON ({exc})") from None
+        raise InputDataError(f"{where}: {exc}") from None
 
 
 def _checked_int(text: str) -> int:

@@ -168,6 +168,9 @@ def run(args: argparse.Namespace) -> int:
                 "duration": trajectory.duration, "valid": check.ok,
                 "max_velocity_ratio": max(check.max_velocity_ratio),
                 "max_acceleration_ratio": max(check.max_acceleration_ratio),
+                "max_jerk_ratio": (None if check.max_jerk_ratio is None
+                                   else max(check.max_jerk_ratio)),
+                "valid_tolerances": {"rtol": check.rtol, "jtol": check.jtol},
                 "legs": [leg.kind for leg in trajectory.legs]}
         write_json(args.json, payload)
         print(f"wrote {args.json}")

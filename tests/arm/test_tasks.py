@@ -107,7 +107,7 @@ def test_malformed_csv(tmp_path: Path, text: str, match: str) -> None:
 
 
 @pytest.mark.parametrize("text, match", [
-    ('{"points": [[1, 2], [3, 4],\n [5, 6]', "line 2: invalid JSON"),
+    ('{"points": [[1, 2], [3, 4],\n [5, 6]', "line 2: not valid JSON"),
     ('[[1, 2], [3, 4], [5, 6]]', "expected an object"),
     ('{"points": [[1, 2], [3], [5, 6]]}', "list of \\[x, y\\] number pairs"),
     ('{"points": [[1, 2], [3, "4"], [5, 6]]}', "list of \\[x, y\\] number pairs"),

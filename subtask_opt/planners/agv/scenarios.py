@@ -25,7 +25,6 @@ are checked before anything is built.
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable
@@ -36,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError, SubtaskOptError, require_int
+from subtask_opt.base.files import parse_json, read_text
 from subtask_opt.base.progress import progress_bar
 from subtask_opt.base.results import Outcome
 from subtask_opt.planners.agv import _kernels as K
@@ -238,60 +238,9 @@ _TOP_KEYS = {"name", "description", "image", "cell_px", "density_factor", "map",
 _OBSTACLE_KEYS = {"path", "speed", "start_time", "name"}
 
 
-def json_depth(text: str, limit: int) -> int:
-    """Nesting depth of JSON text, scanning without parsing; stops counting
-    once ``limit`` is exceeded (returns ``limit + 1``)."""
-    depth = best = 0
-    in_string = escape = False
-    for ch in text:
-        if in_string:
-            if escape:
-                escape = False
-            elif ch == "\\":
-                escape = True
-            elif ch == '"':
-                in_string = False
-        elif ch == '"':
-            in_string = True
-        elif ch in "[{":
-            depth += 1
-            if depth > best:
-                best = depth
-                if best > limit:
-                    return limit + 1
-        elif ch in "]}":
-            depth -= 1
-    return best
-
-
-def _reject_constant(name: str) -> Any:
-    raise InputDataError(f"{name} is not a number a scenario may hold (only finite numbers)")
-
-
 def _read_json(path: Path) -> Any:
-    try:
-        size = path.stat().st_size
-        if size > MAX_SCENARIO_BYTES:
-            raise InputDataError(
-                f"scenario {str(path)!r} is {size} bytes; the limit is {MAX_SCENARIO_BYTES}")
-        with path.open("rb") as fh:
-            raw = fh.read(MAX_SCENARIO_BYTES + 1)
-        text = raw.decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read scenario {str(path)!r}: {exc}") from None
-    if len(raw) > MAX_SCENARIO_BYTES:
-        raise InputDataError(f"scenario {str(path)!r} is over the limit of "
-                             f"{MAX_SCENARIO_BYTES} bytes")
-    if json_depth(text, MAX_JSON_DEPTH) > MAX_JSON_DEPTH:
-        raise InputDataError(f"scenario {str(path)!r} nests arrays/objects deeper than "
-                             f"{MAX_JSON_DEPTH} levels")
-    try:
-        return json.loads(text, parse_constant=_reject_constant)
-    except (ValueError, RecursionError) as exc:
-        if isinstance(exc, SubtaskOptError):
-            raise InputDataError(f"scenario {str(path)!r}: {exc}") from None
-        raise InputDataError(f"scenario {str(path)!r} is not valid JSON: "
-                             f"{str(exc)[:200]}") from None
+    return parse_json(read_text(path, "scenario", max_bytes=MAX_SCENARIO_BYTES),
+                      f"scenario {str(path)!r}", max_depth=MAX_JSON_DEPTH)
 
 
 def load_scenario(path: str | Path) -> AgvScenario:
@@ -490,6 +439,6 @@ def run_agv_suite(n: int, seed: int, *, params: AgvParams | None = None,
 
 
 __all__ = ["MAX_JSON_DEPTH", "MAX_SCENARIO_BYTES", "PAPER_SCENARIOS", "SuiteReport",
-           "draw_image", "get_scenario", "json_depth", "load_scenario", "random_agv_scenario",
+           "draw_image", "get_scenario", "load_scenario", "random_agv_scenario",
            "run_agv_suite", "scenario_1", "scenario_2_1", "scenario_2_2", "scenario_2_3",
            "suite_params"]

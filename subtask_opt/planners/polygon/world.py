@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, UnreachableError
+from subtask_opt.base.files import parse_json
 from subtask_opt.planners.polygon import _kernels as gk
 
 # Relative length tolerance: contact closer than this fraction of the world size counts.
@@ -311,16 +311,7 @@ class PolygonWorld:
         if len(text) > MAX_FILE_BYTES:
             raise InputDataError(f"{source}: {len(text)} characters is over the limit of "
                                  f"{MAX_FILE_BYTES} for a world file")
-        depth = json_depth(text)
-        if depth > MAX_JSON_DEPTH:
-            raise InputDataError(f"{source}: brackets nested {depth} deep; a world needs 4, "
-                                 f"at most {MAX_JSON_DEPTH} are accepted")
-        try:
-            d = json.loads(text, parse_constant=_refuse_constant)
-        except json.JSONDecodeError as exc:
-            raise InputDataError(f"{source}: not valid JSON ({exc})") from None
-        except ValueError as exc:  # NaN/Infinity, or an integer of > 4300 digits
-            raise InputDataError(f"{source}: {exc}") from None
+        d = parse_json(text, source, max_depth=MAX_JSON_DEPTH)  # a world needs 4 levels
         try:
             return cls.from_dict(d, name=name)
         except InputDataError as exc:
@@ -650,21 +641,3 @@ def _parse_polygon(i: int, poly: Any, eps: float) -> np.ndarray:
     return np.ascontiguousarray(p)
 
 
-def json_depth(text: str) -> int:
-    """Deepest nesting of ``[`` / ``{`` in JSON text, brackets inside strings ignored.
-
-    Runs on the raw text before parsing (vectorised), so a deeply nested file
-    cannot exhaust the parser's recursion.
-    """
-    stripped = _JSON_STRING.sub('""', text).encode("utf-8", "replace")
-    codes = np.frombuffer(stripped, dtype=np.uint8)
-    step = ((codes == ord("[")) | (codes == ord("{"))).astype(np.int64) - (
-        (codes == ord("]")) | (codes == ord("}")))
-    return int(max(np.max(np.cumsum(step), initial=0), 0))
-
-
-_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
-
-
-def _refuse_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not a finite number; world coordinates must be finite")

@@ -24,7 +24,6 @@ from subtask_opt.planners.agv.scenarios import (
     MAX_JSON_DEPTH,
     MAX_SCENARIO_BYTES,
     get_scenario,
-    json_depth,
     load_scenario,
 )
 from subtask_opt.planners.agv.simulation import simulate
@@ -90,12 +89,8 @@ def test_nan_and_infinity_literals_are_refused(tmp_path):
 def test_deep_nesting_is_refused_before_parsing(tmp_path):
     deep = "[" * 100_000 + "]" * 100_000
     text = json.dumps(GOOD)[:-1] + ', "description": ' + deep + "}"
-    with pytest.raises(InputDataError, match=f"deeper than {MAX_JSON_DEPTH}"):
+    with pytest.raises(InputDataError, match=f"deeper than the limit of {MAX_JSON_DEPTH}"):
         load_scenario(_write(tmp_path, text))
-    # brackets inside strings do not count
-    assert json_depth('{"a": "[[[[[[[[[[[[[[[[[["}', 8) == 1
-    assert json_depth('{"a": "\\"[[[[[[[[[[[[[[[[[["}', 8) == 1
-    assert json_depth("[[[]]]", 8) == 3
 
 
 def test_oversize_and_unreadable_files_are_refused(tmp_path):
@@ -103,10 +98,10 @@ def test_oversize_and_unreadable_files_are_refused(tmp_path):
     big.write_text(" " * (MAX_SCENARIO_BYTES + 1) + "{}")
     with pytest.raises(InputDataError, match="limit"):
         load_scenario(big)
-    with pytest.raises(InputDataError, match="cannot read"):
+    with pytest.raises(InputDataError, match="not found"):
         load_scenario(tmp_path / "missing.json")
     (tmp_path / "bin.json").write_bytes(b"\xff\xfe\x00")
-    with pytest.raises(InputDataError, match="cannot read"):
+    with pytest.raises(InputDataError, match="not UTF-8"):
         load_scenario(tmp_path / "bin.json")
     with pytest.raises(InputDataError, match="not valid JSON"):
         load_scenario(_write(tmp_path, "{not json"))
