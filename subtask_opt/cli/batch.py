@@ -12,6 +12,7 @@ from subtask_opt.cli._common import (
     add_no_progress,
     json_output,
     non_negative_int,
+    plot_output,
     positive_float,
     positive_int,
     refuse_overwriting_inputs,
@@ -54,6 +55,8 @@ def register(root: argparse._SubParsersAction) -> None:
                       help="stop after N generations without a better tour")
     p.add_argument("--json", required=True, metavar="OUT.json", type=json_output,
                    help="write every job's result (and the failed jobs' errors) as JSON")
+    p.add_argument("--plot", metavar="OUT.png", type=plot_output,
+                   help="write a figure of every job's total time, failed jobs marked")
     add_no_progress(p)
     p.set_defaults(handler=run)
 
@@ -74,7 +77,7 @@ def _stop_criteria(args: argparse.Namespace) -> list | None:
 def run(args: argparse.Namespace) -> int:
     from subtask_opt.batch import default_workers, load_jobs, solve_many
 
-    refuse_overwriting_inputs(args.jobs, [args.json])
+    refuse_overwriting_inputs(args.jobs, [args.json, args.plot])
     jobs = load_jobs(args.jobs)
     workers = args.workers
     if args.scheduler is None and workers is None:
@@ -102,4 +105,10 @@ def run(args: argparse.Namespace) -> int:
     if len(failed) > _SHOWN_FAILURES:
         print(f"  ... and {len(failed) - _SHOWN_FAILURES} more (see {args.json})")
     print(f"wrote {args.json}")
+    if args.plot:
+        from subtask_opt.plotting.batch import save_batch_figure
+
+        save_batch_figure(results, args.plot, title=f"batch of {len(results)} jobs on "
+                                                    f"{summary['where']}")
+        print(f"wrote {args.plot}")
     return EXIT_FAILED if failed else EXIT_OK

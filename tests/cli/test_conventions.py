@@ -126,3 +126,16 @@ def test_batch_with_a_failed_job_exits_1(tmp_path, capsys):
     bad = tmp_path / "far.csv"
     bad.write_text("x,y\n0.30,0.10\n0.35,0.22\n9.0,9.0\n")
     assert main(["batch", str(bad), "--json", str(tmp_path / "b.json"), "--workers", "0"]) == 1
+
+
+def test_batch_plot_marks_the_failed_job(tmp_path, capsys):
+    good = tmp_path / "good.csv"
+    good.write_text("x,y\n0.30,0.10\n0.35,0.22\n0.25,0.30\n")
+    bad = tmp_path / "far.csv"
+    bad.write_text("x,y\n0.30,0.10\n0.35,0.22\n9.0,9.0\n")
+    png = tmp_path / "b.png"
+    assert main(["batch", str(good), str(bad), "--json", str(tmp_path / "b.json"),
+                 "--plot", str(png), "--workers", "0"]) == 1
+    assert png.stat().st_size > 5_000
+    data = json.loads((tmp_path / "b.json").read_text())
+    assert [j["success"] for j in data["jobs"]] == [True, False]
