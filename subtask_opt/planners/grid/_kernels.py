@@ -362,15 +362,85 @@ def octile_queries(blocked, goals, starts, w_side, w_diag, focused, marks):
     return out
 
 
-@njit(cache=True)
-def descend(blocked, dist, sx, sy, w_side, w_diag, cut):
-    """Steepest descent on a chamfer/octile field from (sx, sy) to its zero.
+# Next-cell rules of :func:`_descend`.
+_RULE_NEIGHBOUR, _RULE_REALISING, _RULE_LEAST_VISIBLE = range(3)
 
-    Each step goes to the allowed neighbour minimising value + step cost, i.e.
-    the neighbour the value was propagated from (ties: the lower value, then
-    the first in neighbourhood order), so the path realises the field value.
-    Returns a (k, 2) int64 array of cells, or an empty one if unreachable.
-    """
+
+@njit(cache=True)
+def _next_neighbour(blocked, dist, x, y, w_side, w_diag, cut):
+    """:func:`descend`'s step: the allowed neighbour of least value + step cost."""
+    best_total = np.inf
+    best_val = np.inf
+    bx, by = -1, -1
+    for k in range(8):
+        if not _step_allowed(blocked, x, y, k, cut):
+            continue
+        nx = x + _DX[k]
+        ny = y + _DY[k]
+        val = dist[ny, nx]
+        total = val + (w_side if k < 4 else w_diag)
+        if total < best_total - 1e-9 or (abs(total - best_total) <= 1e-9 and val < best_val):
+            best_total = total
+            best_val = val
+            bx, by = nx, ny
+    return bx, by, best_val
+
+
+@njit(cache=True)
+def _next_realising(blocked, dist, x, y):
+    """:func:`visibility_descend`'s step: the visible cell of least value among
+    those with value + segment length = the current value."""
+    h, w = blocked.shape
+    cur = dist[y, x]
+    tol = 1e-9 * max(1.0, cur)
+    best_val = cur
+    bx, by = -1, -1
+    for ny in range(h):
+        for nx in range(w):
+            val = dist[ny, nx]
+            if not val < best_val:
+                continue
+            ddx = nx - x
+            ddy = ny - y
+            if val + math.sqrt(ddx * ddx + ddy * ddy) > cur + tol:
+                continue
+            if segment_hits(blocked, x, y, nx, ny, True) == 0:
+                best_val = val
+                bx, by = nx, ny
+    return bx, by, best_val
+
+
+@njit(cache=True)
+def _next_least_visible(blocked, dist, x, y):
+    """:func:`descend_least_visible`'s step: the visible cell of least value
+    (ties: the nearer one)."""
+    h, w = blocked.shape
+    best_val = dist[y, x]
+    best_len = np.inf
+    bx, by = -1, -1
+    for ny in range(h):
+        for nx in range(w):
+            val = dist[ny, nx]
+            if val > best_val:
+                continue
+            ddx = nx - x
+            ddy = ny - y
+            seg = math.sqrt(ddx * ddx + ddy * ddy)
+            if seg == 0.0 or (val == best_val and seg >= best_len):
+                continue
+            if segment_hits(blocked, x, y, nx, ny, True) == 0:
+                best_val = val
+                best_len = seg
+                bx, by = nx, ny
+    return bx, by, best_val
+
+
+@njit(cache=True)
+def _descend(blocked, dist, sx, sy, rule, w_side, w_diag, cut):
+    """Walk from (sx, sy) to the zero of ``dist``, one ``rule`` step at a time
+    (``w_side``, ``w_diag`` and ``cut`` matter to ``_RULE_NEIGHBOUR`` only).
+    Returns a (k, 2) int64 array of cells, or an empty one when the start is
+    unreachable or a step finds no cell of smaller value (not a valid field)."""
     h, w = blocked.shape
     if not math.isfinite(dist[sy, sx]):
         return np.zeros((0, 2), dtype=np.int64)
@@ -380,22 +450,14 @@ def descend(blocked, dist, sx, sy, w_side, w_diag, cut):
     out[0, 1] = y
     k_out = 1
     while dist[y, x] > 0.0 and k_out <= h * w:
-        best_total = np.inf
-        best_val = np.inf
-        bx, by = -1, -1
-        for k in range(8):
-            if not _step_allowed(blocked, x, y, k, cut):
-                continue
-            nx = x + _DX[k]
-            ny = y + _DY[k]
-            val = dist[ny, nx]
-            total = val + (w_side if k < 4 else w_diag)
-            if total < best_total - 1e-9 or (abs(total - best_total) <= 1e-9 and val < best_val):
-                best_total = total
-                best_val = val
-                bx, by = nx, ny
+        if rule == _RULE_NEIGHBOUR:
+            bx, by, best_val = _next_neighbour(blocked, dist, x, y, w_side, w_diag, cut)
+        elif rule == _RULE_REALISING:
+            bx, by, best_val = _next_realising(blocked, dist, x, y)
+        else:
+            bx, by, best_val = _next_least_visible(blocked, dist, x, y)
         if bx < 0 or not best_val < dist[y, x]:
-            return np.zeros((0, 2), dtype=np.int64)  # not a valid field
+            return np.zeros((0, 2), dtype=np.int64)
         x, y = bx, by
         out[k_out, 0] = x
         out[k_out, 1] = y
@@ -403,7 +465,33 @@ def descend(blocked, dist, sx, sy, w_side, w_diag, cut):
     return out[:k_out].copy()
 
 
+@njit(cache=True)
+def descend(blocked, dist, sx, sy, w_side, w_diag, cut):
+    """Steepest descent on a chamfer/octile field from (sx, sy) to its zero.
+
+    Each step goes to the allowed neighbour minimising value + step cost, i.e.
+    the neighbour the value was propagated from (ties: the lower value, then
+    the first in neighbourhood order), so the path realises the field value.
+    Returns a (k, 2) int64 array of cells, or an empty one if unreachable.
+    """
+    return _descend(blocked, dist, sx, sy, _RULE_NEIGHBOUR, w_side, w_diag, cut)
+
+
 # -- line of sight between cell centres ------------------------------------------------
+@njit(cache=True)
+def _column_hits(blocked, cx, cy_lo, cy_hi, first_only):
+    """Blocked cells (cells outside the grid count) of column ``cx``, rows
+    ``cy_lo..cy_hi``; with ``first_only`` 1 at the first one."""
+    h, w = blocked.shape
+    hits = 0
+    for cy in range(cy_lo, cy_hi + 1):
+        if cy < 0 or cy >= h or cx < 0 or cx >= w or blocked[cy, cx]:
+            hits += 1
+            if first_only:
+                return 1
+    return hits
+
+
 @njit(cache=True)
 def segment_hits(blocked, x0, y0, x1, y1, first_only):
     """Number of blocked cells whose closed square the segment touches.
@@ -412,21 +500,13 @@ def segment_hits(blocked, x0, y0, x1, y1, first_only):
     ``first_only`` it returns 1 at the first blocked cell. Cells outside the
     grid count as blocked.
     """
-    h, w = blocked.shape
     if x0 > x1:
         x0, y0, x1, y1 = x1, y1, x0, y0
     dx = x1 - x0
     dy = y1 - y0
-    hits = 0
     if dx == 0:
-        lo = min(y0, y1)
-        hi = max(y0, y1)
-        for cy in range(lo, hi + 1):
-            if cy < 0 or cy >= h or x0 < 0 or x0 >= w or blocked[cy, x0]:
-                hits += 1
-                if first_only:
-                    return 1
-        return hits
+        return _column_hits(blocked, x0, min(y0, y1), max(y0, y1), first_only)
+    hits = 0
     for cx in range(x0, x1 + 1):
         xa = max(2 * x0, 2 * cx - 1)
         xb = min(2 * x1, 2 * cx + 1)
@@ -436,24 +516,15 @@ def segment_hits(blocked, x0, y0, x1, y1, first_only):
         nhi = max(na, nb)
         cy_lo = -((dx - nlo) // (2 * dx))  # ceil((nlo - dx) / (2 dx))
         cy_hi = (nhi + dx) // (2 * dx)
-        for cy in range(cy_lo, cy_hi + 1):
-            if cy < 0 or cy >= h or cx < 0 or cx >= w or blocked[cy, cx]:
-                hits += 1
-                if first_only:
-                    return 1
+        hits += _column_hits(blocked, cx, cy_lo, cy_hi, first_only)
+        if first_only and hits > 0:
+            return 1
     return hits
 
 
 @njit(cache=True)
-def visibility_field(blocked, gx, gy):
-    """Any-angle distance field: Dijkstra on the line-of-sight graph.
-
-    Vertices are the free cell centres, edges join every pair with a
-    collision-free straight segment, weighted by its Euclidean length. The
-    graph is dense, so the O(n^2) array Dijkstra (no heap) is the right one:
-    settle the nearest cell, then relax every unsettled cell it can see.
-    Returns the (h, w) field (``inf`` blocked or unreachable).
-    """
+def _free_cells(blocked, gx, gy):
+    """The free cells in row-major order: (xs, ys, index of (gx, gy) or -1)."""
     h, w = blocked.shape
     n_free = 0
     for y in range(h):
@@ -472,6 +543,30 @@ def visibility_field(blocked, gx, gy):
                 if x == gx and y == gy:
                     src = k
                 k += 1
+    return xs, ys, src
+
+
+@njit(cache=True)
+def _to_grid(shape, xs, ys, values):
+    """The (h, w) field holding ``values`` at the cells (xs, ys), ``inf`` elsewhere."""
+    out = np.full(shape, np.inf)
+    for i in range(xs.shape[0]):
+        out[ys[i], xs[i]] = values[i]
+    return out
+
+
+@njit(cache=True)
+def visibility_field(blocked, gx, gy):
+    """Any-angle distance field: Dijkstra on the line-of-sight graph.
+
+    Vertices are the free cell centres, edges join every pair with a
+    collision-free straight segment, weighted by its Euclidean length. The
+    graph is dense, so the O(n^2) array Dijkstra (no heap) is the right one:
+    settle the nearest cell, then relax every unsettled cell it can see.
+    Returns the (h, w) field (``inf`` blocked or unreachable).
+    """
+    xs, ys, src = _free_cells(blocked, gx, gy)
+    n_free = xs.shape[0]
     dist = np.full(n_free, np.inf)
     done = np.zeros(n_free, dtype=np.bool_)
     dist[src] = 0.0
@@ -495,10 +590,7 @@ def visibility_field(blocked, gx, gy):
             nd = du + math.sqrt(ddx * ddx + ddy * ddy)
             if nd < dist[v] and segment_hits(blocked, ux, uy, xs[v], ys[v], True) == 0:
                 dist[v] = nd
-    out = np.full((h, w), np.inf)
-    for i in range(n_free):
-        out[ys[i], xs[i]] = dist[i]
-    return out
+    return _to_grid(blocked.shape, xs, ys, dist)
 
 
 @njit(cache=True)
@@ -507,38 +599,7 @@ def visibility_descend(blocked, dist, sx, sy):
     cell of least value among those that realise the current value
     (value + segment length = current value), so the path has the field's
     length and as few waypoints as the field allows."""
-    h, w = blocked.shape
-    if not math.isfinite(dist[sy, sx]):
-        return np.zeros((0, 2), dtype=np.int64)
-    out = np.empty((h * w + 1, 2), dtype=np.int64)
-    x, y = sx, sy
-    out[0, 0] = x
-    out[0, 1] = y
-    k_out = 1
-    while dist[y, x] > 0.0 and k_out <= h * w:
-        cur = dist[y, x]
-        tol = 1e-9 * max(1.0, cur)
-        best_val = cur
-        bx, by = -1, -1
-        for ny in range(h):
-            for nx in range(w):
-                val = dist[ny, nx]
-                if not val < best_val:
-                    continue
-                ddx = nx - x
-                ddy = ny - y
-                if val + math.sqrt(ddx * ddx + ddy * ddy) > cur + tol:
-                    continue
-                if segment_hits(blocked, x, y, nx, ny, True) == 0:
-                    best_val = val
-                    bx, by = nx, ny
-        if bx < 0:
-            return np.zeros((0, 2), dtype=np.int64)
-        x, y = bx, by
-        out[k_out, 0] = x
-        out[k_out, 1] = y
-        k_out += 1
-    return out[:k_out].copy()
+    return _descend(blocked, dist, sx, sy, _RULE_REALISING, 1.0, 1.0, False)
 
 
 @njit(cache=True)
@@ -553,24 +614,8 @@ def visibility_levels(blocked, gx, gy):
     also has the fewest segments. Returns the (h, w) field (``inf`` blocked or
     unreachable).
     """
-    h, w = blocked.shape
-    n_free = 0
-    for y in range(h):
-        for x in range(w):
-            if not blocked[y, x]:
-                n_free += 1
-    xs = np.empty(n_free, dtype=np.int64)
-    ys = np.empty(n_free, dtype=np.int64)
-    k = 0
-    src = -1
-    for y in range(h):
-        for x in range(w):
-            if not blocked[y, x]:
-                xs[k] = x
-                ys[k] = y
-                if x == gx and y == gy:
-                    src = k
-                k += 1
+    xs, ys, src = _free_cells(blocked, gx, gy)
+    n_free = xs.shape[0]
     value = np.full(n_free, np.inf)
     new_value = np.full(n_free, np.inf)
     frontier = np.empty(n_free, dtype=np.int64)
@@ -599,10 +644,7 @@ def visibility_levels(blocked, gx, gy):
             value[nxt[f]] = new_value[nxt[f]]
         frontier[:n_next] = nxt[:n_next]
         n_front = n_next
-    out = np.full((h, w), np.inf)
-    for i in range(n_free):
-        out[ys[i], xs[i]] = value[i]
-    return out
+    return _to_grid(blocked.shape, xs, ys, value)
 
 
 @njit(cache=True)
@@ -611,39 +653,7 @@ def descend_least_visible(blocked, dist, sx, sy):
     value (ties: the nearer one) until the zero cell. Every cell of a level
     field sees the cell it was filled from, which holds a smaller value, so
     each jump lowers the value and the walk ends."""
-    h, w = blocked.shape
-    if not math.isfinite(dist[sy, sx]):
-        return np.zeros((0, 2), dtype=np.int64)
-    out = np.empty((h * w + 1, 2), dtype=np.int64)
-    x, y = sx, sy
-    out[0, 0] = x
-    out[0, 1] = y
-    k_out = 1
-    while dist[y, x] > 0.0 and k_out <= h * w:
-        best_val = dist[y, x]
-        best_len = np.inf
-        bx, by = -1, -1
-        for ny in range(h):
-            for nx in range(w):
-                val = dist[ny, nx]
-                if val > best_val:
-                    continue
-                ddx = nx - x
-                ddy = ny - y
-                seg = math.sqrt(ddx * ddx + ddy * ddy)
-                if seg == 0.0 or (val == best_val and seg >= best_len):
-                    continue
-                if segment_hits(blocked, x, y, nx, ny, True) == 0:
-                    best_val = val
-                    best_len = seg
-                    bx, by = nx, ny
-        if bx < 0 or not best_val < dist[y, x]:
-            return np.zeros((0, 2), dtype=np.int64)
-        x, y = bx, by
-        out[k_out, 0] = x
-        out[k_out, 1] = y
-        k_out += 1
-    return out[:k_out].copy()
+    return _descend(blocked, dist, sx, sy, _RULE_LEAST_VISIBLE, 1.0, 1.0, False)
 
 
 # -- local planners: a simulated robot with a certainty grid ---------------------------
@@ -708,28 +718,23 @@ def _sense(blocked, certainty, x, y, radius, increment, c_max):
 
 
 @njit(cache=True)
+def _clip_axis(t0, t1, p0, d, lo, hi):
+    """One axis of Liang-Barsky: the parameter interval [t0, t1] of
+    ``p0 + t d`` cut to [lo, hi]; an empty one (t0 > t1) if the line misses."""
+    if d == 0.0:
+        if p0 < lo or p0 > hi:
+            return 1.0, 0.0
+        return t0, t1
+    ta = (lo - p0) / d
+    tb = (hi - p0) / d
+    return max(t0, min(ta, tb)), min(t1, max(ta, tb))
+
+
+@njit(cache=True)
 def _touches_box(x0, y0, x1, y1, lo_x, lo_y, hi_x, hi_y):
     """Whether the segment (x0, y0)-(x1, y1) meets the closed box (Liang-Barsky)."""
-    t0 = 0.0
-    t1 = 1.0
-    dx = x1 - x0
-    dy = y1 - y0
-    if dx == 0.0:
-        if x0 < lo_x or x0 > hi_x:
-            return False
-    else:
-        ta = (lo_x - x0) / dx
-        tb = (hi_x - x0) / dx
-        t0 = max(t0, min(ta, tb))
-        t1 = min(t1, max(ta, tb))
-    if dy == 0.0:
-        if y0 < lo_y or y0 > hi_y:
-            return False
-    else:
-        ta = (lo_y - y0) / dy
-        tb = (hi_y - y0) / dy
-        t0 = max(t0, min(ta, tb))
-        t1 = min(t1, max(ta, tb))
+    t0, t1 = _clip_axis(0.0, 1.0, x0, x1 - x0, lo_x, hi_x)
+    t0, t1 = _clip_axis(t0, t1, y0, y1 - y0, lo_y, hi_y)
     return t0 <= t1
 
 
@@ -791,6 +796,51 @@ def _stall(traj, step, gx, gy, best_d, last_gain, robot):
 
 
 @njit(cache=True)
+def _drive_start(blocked, sx, sy, gx, gy, robot):
+    """The state of a fresh drive: (certainty grid, trajectory buffer with the
+    start, heading at the goal, distance to the goal)."""
+    certainty = np.zeros(blocked.shape)
+    traj = np.empty((robot.max_steps + 1, 2))
+    traj[0, 0] = sx
+    traj[0, 1] = sy
+    return certainty, traj, math.atan2(gy - sy, gx - sx), math.hypot(gx - sx, gy - sy)
+
+
+@njit(cache=True)
+def _observe(blocked, certainty, traj, step, gx, gy, robot):
+    """Start of ``step``: returns (x, y, arrived) for the robot at
+    ``traj[step - 1]``; unless it has arrived, it senses into ``certainty``."""
+    x = traj[step - 1, 0]
+    y = traj[step - 1, 1]
+    if _arrived(blocked, x, y, gx, gy, robot.goal_tolerance):
+        return x, y, True
+    _sense(blocked, certainty, x, y, robot.window, robot.certainty_increment,
+           robot.certainty_max)
+    return x, y, False
+
+
+@njit(cache=True)
+def _drive_step(blocked, traj, step, heading, turn, gx, gy, best_d, last_gain, robot):
+    """End of ``step``: turn by ``turn`` (limited to ``robot.max_turn``), move,
+    test for a stall. Returns (code or -1, heading, best distance, step of
+    last gain); the code is ``COLLISION`` or a :func:`_stall` code."""
+    heading = wrap(heading + max(-robot.max_turn, min(robot.max_turn, turn)))
+    if not _move(blocked, traj, step, heading, robot.speed):
+        return COLLISION, heading, best_d, last_gain
+    code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, robot)
+    return code, heading, best_d, last_gain
+
+
+@njit(cache=True)
+def _drive_end(blocked, traj, gx, gy, robot):
+    """Outcome of a drive that used every step: arrived, or the step limit."""
+    n = robot.max_steps
+    if _arrived(blocked, traj[n, 0], traj[n, 1], gx, gy, robot.goal_tolerance):
+        return REACHED, traj
+    return STEP_LIMIT, traj
+
+
+@njit(cache=True)
 def vff_run(blocked, sx, sy, gx, gy, robot, force):
     """Virtual force field (Borenstein & Koren 1989), eq. 2.1-2.6.
 
@@ -799,20 +849,13 @@ def vff_run(blocked, sx, sy, gx, gy, robot, force):
     """
     radius = robot.window
     h, w = blocked.shape
-    certainty = np.zeros((h, w))
-    traj = np.empty((robot.max_steps + 1, 2))
-    traj[0, 0] = sx
-    traj[0, 1] = sy
-    heading = math.atan2(gy - sy, gx - sx)
-    best_d = math.hypot(gx - sx, gy - sy)
+    certainty, traj, heading, best_d = _drive_start(blocked, sx, sy, gx, gy, robot)
     last_gain = 0
     r = int(math.ceil(radius))
     for step in range(1, robot.max_steps + 1):
-        x = traj[step - 1, 0]
-        y = traj[step - 1, 1]
-        if _arrived(blocked, x, y, gx, gy, robot.goal_tolerance):
+        x, y, arrived = _observe(blocked, certainty, traj, step, gx, gy, robot)
+        if arrived:
             return REACHED, traj[:step].copy()
-        _sense(blocked, certainty, x, y, radius, robot.certainty_increment, robot.certainty_max)
         fx = 0.0
         fy = 0.0
         cx = int(math.floor(x + 0.5))
@@ -835,16 +878,11 @@ def vff_run(blocked, sx, sy, gx, gy, robot, force):
         ry = fy + force.f_ct * (gy - y) / dg
         delta = math.atan2(ry, rx)
         omega = force.k_s * wrap(delta - heading)  # eq. 2.5, 2.6
-        heading = wrap(heading + max(-robot.max_turn, min(robot.max_turn, omega)))
-        if not _move(blocked, traj, step, heading, robot.speed):
-            return COLLISION, traj[: step + 1].copy()
-        code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, robot)
+        code, heading, best_d, last_gain = _drive_step(blocked, traj, step, heading, omega,
+                                                       gx, gy, best_d, last_gain, robot)
         if code >= 0:
             return code, traj[: step + 1].copy()
-    n = robot.max_steps
-    if _arrived(blocked, traj[n, 0], traj[n, 1], gx, gy, robot.goal_tolerance):
-        return REACHED, traj
-    return STEP_LIMIT, traj
+    return _drive_end(blocked, traj, gx, gy, robot)
 
 
 @njit(cache=True)
@@ -937,24 +975,15 @@ def vfh_run(blocked, sx, sy, gx, gy, robot, hist):
     ``robot`` is a :class:`RobotKernelParams`, ``hist`` a
     :class:`VFHKernelParams`. Returns (outcome code, trajectory).
     """
-    radius = robot.window
-    h, w = blocked.shape
     n_sectors = int(round(2.0 * math.pi / hist.alpha))  # eq. 2.9
     width = 2.0 * math.pi / n_sectors
-    certainty = np.zeros((h, w))
-    traj = np.empty((robot.max_steps + 1, 2))
-    traj[0, 0] = sx
-    traj[0, 1] = sy
-    heading = math.atan2(gy - sy, gx - sx)
-    best_d = math.hypot(gx - sx, gy - sy)
+    certainty, traj, heading, best_d = _drive_start(blocked, sx, sy, gx, gy, robot)
     last_gain = 0
     for step in range(1, robot.max_steps + 1):
-        x = traj[step - 1, 0]
-        y = traj[step - 1, 1]
-        if _arrived(blocked, x, y, gx, gy, robot.goal_tolerance):
+        x, y, arrived = _observe(blocked, certainty, traj, step, gx, gy, robot)
+        if arrived:
             return REACHED, traj[:step].copy()
-        _sense(blocked, certainty, x, y, radius, robot.certainty_increment, robot.certainty_max)
-        smooth = polar_histogram(certainty, x, y, radius, n_sectors, hist.a, hist.b,
+        smooth = polar_histogram(certainty, x, y, robot.window, n_sectors, hist.a, hist.b,
                                  hist.smoothing, hist.centre_weight)
         to_goal = math.atan2(gy - y, gx - x)
         if to_goal < 0.0:
@@ -964,14 +993,9 @@ def vfh_run(blocked, sx, sy, gx, gy, robot, hist):
         if k == -1.0:
             return NO_VALLEY, traj[:step].copy()
         want = to_goal if k == float(kt) else (k + 0.5) * width
-        turn = wrap(want - heading)
-        heading = wrap(heading + max(-robot.max_turn, min(robot.max_turn, turn)))
-        if not _move(blocked, traj, step, heading, robot.speed):
-            return COLLISION, traj[: step + 1].copy()
-        code, best_d, last_gain = _stall(traj, step, gx, gy, best_d, last_gain, robot)
+        code, heading, best_d, last_gain = _drive_step(blocked, traj, step, heading,
+                                                       wrap(want - heading), gx, gy, best_d,
+                                                       last_gain, robot)
         if code >= 0:
             return code, traj[: step + 1].copy()
-    n = robot.max_steps
-    if _arrived(blocked, traj[n, 0], traj[n, 1], gx, gy, robot.goal_tolerance):
-        return REACHED, traj
-    return STEP_LIMIT, traj
+    return _drive_end(blocked, traj, gx, gy, robot)

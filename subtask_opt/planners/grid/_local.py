@@ -13,6 +13,8 @@ limit (outcome ``timeout``).
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -120,6 +122,35 @@ def clear_simplify(world: GridWorld, path: np.ndarray, tol: float = 0.05) -> np.
             keep.extend(range(int(a) + 1, int(b)))
         keep.append(int(b))
     return path[keep]
+
+
+def drive(name: str, run: Callable[..., tuple[int, np.ndarray]], world: GridWorld, start: Any,
+          goal: Any, robot: GridRobotParams, algorithm: Any, *, seed: object = None,
+          stop: object = None) -> PlanResult:
+    """The ``plan`` of VFF and VFH: check the arguments, drive, return the result.
+
+    Args:
+        name: the planner's name (``"vff"`` or ``"vfh"``).
+        run: its kernel (:func:`._kernels.vff_run` or :func:`._kernels.vfh_run`).
+        world, start, goal: as for every grid planner.
+        robot: the simulated robot.
+        algorithm: the kernel's own parameters (a ``*KernelParams`` NamedTuple).
+        seed, stop: must be None (:func:`check_deterministic`).
+
+    Returns:
+        :func:`drive_result` of the run.
+
+    Raises:
+        UnreachableError: start or goal outside the grid or blocked.
+        ParameterError: a seed or a stopping criterion was given.
+    """
+    check_deterministic(name, seed, stop)
+    s = world.check_cell("start", start)
+    g = world.check_cell("goal", goal)
+    t0 = time.perf_counter()
+    code, traj = run(world.occupancy.view(np.uint8), float(s[0]), float(s[1]),
+                     float(g[0]), float(g[1]), robot.kernel(), algorithm)
+    return drive_result(world, int(code), traj, name, time.perf_counter() - t0, g)
 
 
 def drive_result(world: GridWorld, code: int, traj: np.ndarray, name: str, runtime: float,

@@ -241,11 +241,7 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = N
 def plan_dt(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = None,
             seed: int | None = None, stop: Any = None) -> PlanResult:
     """The thesis' 3:4 distance transform: :func:`plan` with ``DTParams("chamfer34")``."""
-    params = params or DTParams("chamfer34")
-    if params.metric != "chamfer34":
-        raise ParameterError(f"planner dt takes DTParams(metric='chamfer34'), "
-                             f"got metric={params.metric!r} (use dt-octile)")
-    return plan(world, start, goal, params=params, seed=seed, stop=stop)
+    return _plan_metric("dt", "chamfer34", "dt-octile", world, start, goal, params, seed, stop)
 
 
 @register("grid", "dt-octile",
@@ -253,10 +249,17 @@ def plan_dt(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None 
 def plan_octile(world: GridWorld, start: Any, goal: Any, *, params: DTParams | None = None,
                 seed: int | None = None, stop: Any = None) -> PlanResult:
     """The exact 8-connected transform: :func:`plan` with ``DTParams("octile")``."""
-    params = params or DTParams("octile")
-    if params.metric != "octile":
-        raise ParameterError(f"planner dt-octile takes DTParams(metric='octile'), "
-                             f"got metric={params.metric!r} (use dt)")
+    return _plan_metric("dt-octile", "octile", "dt", world, start, goal, params, seed, stop)
+
+
+def _plan_metric(name: str, metric: str, other: str, world: GridWorld, start: Any, goal: Any,
+                 params: DTParams | None, seed: int | None, stop: Any) -> PlanResult:
+    """:func:`plan` for planner ``name``, whose params must have ``metric``
+    (the error points to planner ``other`` otherwise)."""
+    params = params or DTParams(metric)
+    if params.metric != metric:
+        raise ParameterError(f"planner {name} takes DTParams(metric={metric!r}), "
+                             f"got metric={params.metric!r} (use {other})")
     return plan(world, start, goal, params=params, seed=seed, stop=stop)
 
 

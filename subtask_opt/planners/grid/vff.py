@@ -14,17 +14,14 @@ never clash with the sonar VFF of :mod:`subtask_opt.planners.reactive`.
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from subtask_opt.base.errors import require_positive
 from subtask_opt.base.results import PlanResult
 from subtask_opt.planners.base import register
 from subtask_opt.planners.grid import _kernels as K
-from subtask_opt.planners.grid._local import GridRobotParams, check_deterministic, drive_result
+from subtask_opt.planners.grid._local import GridRobotParams, drive
 from subtask_opt.planners.grid.world import GridWorld
 
 __all__ = ["GridRobotParams", "GridVFFParams", "plan"]
@@ -60,17 +57,9 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: GridVFFParams | Non
     """Drive from ``start`` to ``goal`` with the virtual force field.
 
     Deterministic: ``seed`` and ``stop`` must be None (the run ends by
-    ``robot.max_steps``). See :func:`._local.drive_result` for the result.
-
-    Raises:
-        UnreachableError: start or goal outside the grid or blocked.
-        ParameterError: a seed or a stopping criterion was given.
+    ``robot.max_steps``). See :func:`._local.drive` for the result and the
+    errors it raises.
     """
-    check_deterministic("vff", seed, stop)
     params = params or GridVFFParams()
-    s = world.check_cell("start", start)
-    g = world.check_cell("goal", goal)
-    t0 = time.perf_counter()
-    code, traj = K.vff_run(world.occupancy.view(np.uint8), float(s[0]), float(s[1]),
-                           float(g[0]), float(g[1]), params.robot.kernel(), params.kernel())
-    return drive_result(world, int(code), traj, "vff", time.perf_counter() - t0, g)
+    return drive("vff", K.vff_run, world, start, goal, params.robot, params.kernel(),
+                 seed=seed, stop=stop)

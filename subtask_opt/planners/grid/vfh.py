@@ -21,17 +21,14 @@ as printed.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from subtask_opt.base.errors import ParameterError, require_int, require_positive
 from subtask_opt.base.results import PlanResult
 from subtask_opt.planners.base import register
 from subtask_opt.planners.grid import _kernels as K
-from subtask_opt.planners.grid._local import GridRobotParams, check_deterministic, drive_result
+from subtask_opt.planners.grid._local import GridRobotParams, drive
 from subtask_opt.planners.grid.world import GridWorld
 
 __all__ = ["CENTRE_WEIGHTS", "GridVFHParams", "plan"]
@@ -104,18 +101,9 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: GridVFHParams | Non
          seed: int | None = None, stop: Any = None) -> PlanResult:
     """Drive from ``start`` to ``goal`` with the vector field histogram.
 
-    Deterministic: ``seed`` and ``stop`` must be None. See
-    :func:`._local.drive_result` for the result.
-
-    Raises:
-        UnreachableError: start or goal outside the grid or blocked.
-        ParameterError: a seed or a stopping criterion was given.
+    Deterministic, as :mod:`.vff`: the result and the errors are those of
+    :func:`._local.drive`.
     """
-    check_deterministic("vfh", seed, stop)
     params = params or GridVFHParams()
-    s = world.check_cell("start", start)
-    g = world.check_cell("goal", goal)
-    t0 = time.perf_counter()
-    code, traj = K.vfh_run(world.occupancy.view(np.uint8), float(s[0]), float(s[1]),
-                           float(g[0]), float(g[1]), params.robot.kernel(), params.kernel())
-    return drive_result(world, int(code), traj, "vfh", time.perf_counter() - t0, g)
+    return drive("vfh", K.vfh_run, world, start, goal, params.robot, params.kernel(),
+                 seed=seed, stop=stop)
