@@ -80,8 +80,9 @@ _announced = False
 def compiling(group: str, what: str) -> Iterator[None]:
     """Around the first call of a group of kernels: say once that numba is compiling.
 
-    When ``group`` is not yet in the cache, one line goes to stderr at once and,
-    on a terminal, a ticking elapsed-time bar; the group is marked warm after.
+    When ``group`` is not yet in the cache and stderr is a terminal, one line goes
+    to stderr at once, then a ticking elapsed-time bar (logs and pipes stay clean,
+    so an error is still one line); the group is marked warm after.
     """
     global _announced
     if is_warm(group):
@@ -89,7 +90,7 @@ def compiling(group: str, what: str) -> Iterator[None]:
         return
     from subtask_opt.base.progress import elapsed_ticker
 
-    if not _announced:
+    if not _announced and sys.stderr.isatty():
         print(f"subtask-opt: compiling {what} once (numba; cached afterwards in {CACHE_DIR})",
               file=sys.stderr, flush=True)
         _announced = True

@@ -34,6 +34,43 @@ EXIT_FAILED = 1
 EXIT_BAD_INPUT = 2
 """A user mistake: bad option, unreadable or malformed input (one line on stderr)."""
 
+MAX_GENERATIONS = 10_000_000
+MAX_STALL = 1_000_000
+MAX_RUNTIME_S = 86_400.0
+
+
+def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: bool) -> None:
+    """The GA's stopping options, bounded (``--target`` too when ``target``)."""
+    stop = parser.add_argument_group(title)
+    stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
+                      help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
+    stop.add_argument("--time-limit", "--max-runtime", dest="max_runtime",
+                      type=float_in(0.0, MAX_RUNTIME_S, open_low=True), metavar="SECONDS",
+                      help=f"stop after this long, in (0, {MAX_RUNTIME_S:g}]")
+    stop.add_argument("--no-improvement", type=int_in(1, MAX_STALL), metavar="N",
+                      help=f"stop after N generations without a better tour, "
+                           f"N in [1, {MAX_STALL}]")
+    if target:
+        stop.add_argument("--target", type=float_in(0.0, 1e12), metavar="SECONDS",
+                          help="stop once the total time is at most this")
+
+
+def stop_criteria(args: argparse.Namespace) -> list[Any] | None:
+    """The criteria :func:`add_stop_options` asked for (None: the solver's default)."""
+    from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
+
+    criteria: list[Any] = []
+    if args.max_generations is not None:
+        criteria.append(MaxGenerations(args.max_generations))
+    if args.max_runtime is not None:
+        criteria.append(MaxRuntime(args.max_runtime))
+    if args.no_improvement is not None:
+        criteria.append(NoImprovement(args.no_improvement))
+    if getattr(args, "target", None) is not None:
+        criteria.append(TargetCost(args.target))
+    return criteria or None
+
+
 def failed(message: str) -> int:
     """Report a job that ran and failed (one line on stderr); return :data:`EXIT_FAILED`."""
     print(f"subtask-opt: failed: {' '.join(str(message).split())}", file=sys.stderr)

@@ -10,13 +10,13 @@ from subtask_opt.cli._common import (
     EXIT_FAILED,
     EXIT_OK,
     add_no_progress,
+    add_stop_options,
     json_output,
     non_negative_int,
     plot_output,
-    positive_float,
-    positive_int,
     refuse_overwriting_inputs,
     seed,
+    stop_criteria,
     write_json,
 )
 
@@ -48,30 +48,14 @@ def register(root: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=seed, default=None, metavar="N",
                    help="solver seed of every job (default: each manifest job's own seed, "
                         "0 for subtask files)")
-    stop = p.add_argument_group("stopping, per job (any criterion given stops the run)")
-    stop.add_argument("--max-generations", type=positive_int, metavar="N")
-    stop.add_argument("--max-runtime", type=positive_float, metavar="SECONDS")
-    stop.add_argument("--no-improvement", type=positive_int, metavar="N",
-                      help="stop after N generations without a better tour")
+    add_stop_options(p, title="stopping, per job (any criterion given stops the run)",
+                     target=False)
     p.add_argument("--json", required=True, metavar="OUT.json", type=json_output,
                    help="write every job's result (and the failed jobs' errors) as JSON")
     p.add_argument("--plot", metavar="OUT.png", type=plot_output,
                    help="write a figure of every job's total time, failed jobs marked")
     add_no_progress(p)
     p.set_defaults(handler=run)
-
-
-def _stop_criteria(args: argparse.Namespace) -> list | None:
-    from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement
-
-    criteria: list = []
-    if args.max_generations is not None:
-        criteria.append(MaxGenerations(args.max_generations))
-    if args.max_runtime is not None:
-        criteria.append(MaxRuntime(args.max_runtime))
-    if args.no_improvement is not None:
-        criteria.append(NoImprovement(args.no_improvement))
-    return criteria or None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -83,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
     if args.scheduler is None and workers is None:
         workers = default_workers()
     started = time.perf_counter()
-    results = solve_many(jobs, seeds=args.seed, stop=_stop_criteria(args),
+    results = solve_many(jobs, seeds=args.seed, stop=stop_criteria(args),
                          client=args.scheduler, workers=workers,
                          progress=not args.no_progress and sys.stderr.isatty())
     wall = time.perf_counter() - started

@@ -8,26 +8,24 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
+from subtask_opt.base.stop import TargetCost
 from subtask_opt.cli._common import (
     EXIT_FAILED,
     EXIT_OK,
+    MAX_RUNTIME_S,
     add_no_progress,
     add_outputs,
+    add_stop_options,
     animation_output,
     float_in,
     floats,
-    int_in,
     json_output,
     non_negative_int,
     refuse_overwriting_inputs,
     seed,
+    stop_criteria,
     write_json,
 )
-
-MAX_GENERATIONS = 10_000_000
-MAX_STALL = 1_000_000
-MAX_RUNTIME_S = 86_400.0
 
 
 def register(root: argparse._SubParsersAction) -> None:
@@ -78,17 +76,7 @@ def register(root: argparse._SubParsersAction) -> None:
     limits.add_argument("--amax", type=floats, metavar="A[,A]",
                         help="joint acceleration limits, rad/s^2")
     limits.add_argument("--jmax", type=floats, metavar="J[,J]", help="joint jerk limits, rad/s^3")
-    stop = p.add_argument_group("stopping (any criterion given stops the run)")
-    stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
-                      help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
-    stop.add_argument("--time-limit", "--max-runtime", dest="max_runtime",
-                      type=float_in(0.0, MAX_RUNTIME_S, open_low=True), metavar="SECONDS",
-                      help=f"stop after this long, in (0, {MAX_RUNTIME_S:g}]")
-    stop.add_argument("--no-improvement", type=int_in(1, MAX_STALL), metavar="N",
-                      help=f"stop after N generations without a better tour, "
-                           f"N in [1, {MAX_STALL}]")
-    stop.add_argument("--target", type=float_in(0.0, 1e12), metavar="SECONDS",
-                      help="stop once the total time is at most this")
+    add_stop_options(p, title="stopping (any criterion given stops the run)", target=True)
     out = p.add_argument_group("output")
     add_outputs(out, plot="the tour over the workspace and the convergence plot")
     out.add_argument("--trajectory", metavar="OUT.csv", type=json_output,
@@ -101,19 +89,6 @@ def register(root: argparse._SubParsersAction) -> None:
     out.add_argument("--quiet", action="store_true", help="print only the summary (no leg table)")
     add_no_progress(out)
     p.set_defaults(handler=run)
-
-
-def _stop_criteria(args: argparse.Namespace) -> list[Any] | None:
-    criteria: list[Any] = []
-    if args.max_generations is not None:
-        criteria.append(MaxGenerations(args.max_generations))
-    if args.max_runtime is not None:
-        criteria.append(MaxRuntime(args.max_runtime))
-    if args.no_improvement is not None:
-        criteria.append(NoImprovement(args.no_improvement))
-    if args.target is not None:
-        criteria.append(TargetCost(args.target))
-    return criteria or None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -138,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
                                     line_fallback=args.line_fallback)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
-    stop = _stop_criteria(args)
+    stop = stop_criteria(args)
     params = SolverParams(preset=args.preset)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
         stop = stop + params.default_stop(len(subtasks))
