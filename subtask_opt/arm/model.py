@@ -20,8 +20,6 @@ installed distribution, with ``robots/asr_twodof.json`` for its limits).
 
 from __future__ import annotations
 
-import importlib.metadata
-import importlib.resources
 import math
 import threading
 from dataclasses import dataclass
@@ -31,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.arm import _kinematics_kernels as _k
+from subtask_opt.arm.serial import example_robot_data_share, robots_dir
 from subtask_opt.base.errors import (
     InputDataError,
     ParameterError,
@@ -341,20 +340,6 @@ class Arm:
             raise UnreachableError(f"{where} {why}")
 
 
-def _robots_dir() -> Path:
-    return Path(str(importlib.resources.files("subtask_opt.robots")))
-
-
-def _example_robot_data_dir() -> Path:
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        raise InputDataError(
-            "robot 'asr_twodof' needs the example-robot-data package (pip install "
-            "example-robot-data)") from None
-    return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
-
-
 def _read_params(path: Path) -> dict[str, Any]:
     params = parse_json(read_text(path, "robot parameter file", max_bytes=1 << 20),
                         f"robot parameter file {path}")
@@ -391,11 +376,12 @@ def load_arm(name_or_path: str | Path = "planar_2r", *,
     text = str(name_or_path)
     if text in ROBOT_NAMES:
         name = text
-        params_path: Path | None = _robots_dir() / f"{text}.json"
+        params_path: Path | None = robots_dir() / f"{text}.json"
         if text == "asr_twodof":
-            urdf = _example_robot_data_dir() / "asr_twodof_description" / "urdf" / "TwoDofs.urdf"
+            urdf = (example_robot_data_share() / "example-robot-data" / "robots"
+                    / "asr_twodof_description" / "urdf" / "TwoDofs.urdf")
         else:
-            urdf = _robots_dir() / f"{text}.urdf"
+            urdf = robots_dir() / f"{text}.urdf"
     elif text.lower().endswith(".urdf") or Path(text).is_file():
         urdf = Path(text)
         name = urdf.stem

@@ -232,8 +232,9 @@ def example_robot_data_share() -> Path:
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:
-        raise InputDataError("robots ur3/ur5/ur10/panda need the example-robot-data package "
-                             "(pip install example-robot-data)") from None
+        raise InputDataError("robots asr_twodof, ur3, ur5, ur10 and panda need the "
+                             "example-robot-data package (pip install example-robot-data)") \
+            from None
     share = Path(str(dist.locate_file("cmeel.prefix/share")))
     if not (share / "example-robot-data" / "robots").is_dir():
         raise InputDataError(f"example-robot-data's robots folder not found under {share}")
