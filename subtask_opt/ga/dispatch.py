@@ -84,29 +84,38 @@ def _operator(kind: Any, name: str) -> Any:
     return getattr(ops, name)
 
 
+def _python_operator(kind: Any, name: str) -> Any:
+    """The operator for a kind tag in plain Python (numba compiles the overloads instead)."""
+    ops = _REGISTRY.get(int(_KIND_OF_TAG[type(kind)]))
+    if ops is None:
+        raise ParameterError(f"GA dispatch: no operators registered for {type(kind).__name__}")
+    return getattr(ops, name)
+
+
 def randomize(kind, genes, data, aux, rng, best, best_len):  # type: ignore[no-untyped-def]
-    """Dispatch to the kind's randomize (numba only)."""
-    raise NotImplementedError("call from a numba kernel")
+    """Dispatch to the kind's randomize (Python body: used only with NUMBA_DISABLE_JIT)."""
+    return _python_operator(kind, "randomize")(genes, data, aux, rng, best, best_len)
 
 
 def evaluate(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
-    """Dispatch to the kind's evaluate (numba only)."""
-    raise NotImplementedError("call from a numba kernel")
+    """Dispatch to the kind's evaluate (Python body: used only with NUMBA_DISABLE_JIT)."""
+    return _python_operator(kind, "evaluate")(genes, length, data, aux)
 
 
 def crossover(kind, genes_a, len_a, genes_b, len_b, data, aux, rng, child):  # type: ignore[no-untyped-def]
-    """Dispatch to the kind's crossover (numba only)."""
-    raise NotImplementedError("call from a numba kernel")
+    """Dispatch to the kind's crossover (Python body: used only with NUMBA_DISABLE_JIT)."""
+    op = _python_operator(kind, "crossover")
+    return op(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
 
 
 def mutate(kind, genes, length, data, aux, rng, strength):  # type: ignore[no-untyped-def]
-    """Dispatch to the kind's mutate (numba only)."""
-    raise NotImplementedError("call from a numba kernel")
+    """Dispatch to the kind's mutate (Python body: used only with NUMBA_DISABLE_JIT)."""
+    return _python_operator(kind, "mutate")(genes, length, data, aux, rng, strength)
 
 
 def improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
-    """Dispatch to the kind's improve (numba only)."""
-    raise NotImplementedError("call from a numba kernel")
+    """Dispatch to the kind's improve (Python body: used only with NUMBA_DISABLE_JIT)."""
+    return _python_operator(kind, "improve")(genes, length, data, aux)
 
 
 @overload(randomize, inline="always")
