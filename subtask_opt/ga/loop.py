@@ -53,7 +53,7 @@ class GAOutcome:
     extra: dict = field(default_factory=dict)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pick_parent(costs, tournament, rng):
     n = costs.shape[0]
     best = rng.integers(0, n)
@@ -64,7 +64,7 @@ def _pick_parent(costs, tournament, rng):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pick_pair(costs, tournament, rng):
     """Two distinct parent indices (a string never mates with itself)."""
     n = costs.shape[0]
@@ -86,7 +86,7 @@ def _pick_pair(costs, tournament, rng):
     return a, b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _population_converged(costs, previous_costs, tol):
     """Costs within ``tol`` of each other, or the population stopped changing.
 
@@ -103,7 +103,7 @@ def _population_converged(costs, previous_costs, tol):
     return _same_multiset(costs, previous_costs)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _same_multiset(a, b):
     """``np.array_equal(np.sort(a), np.sort(b))`` for a small population, without
     compiling a general sort: each value occurs equally often in both."""
@@ -116,6 +116,22 @@ def _same_multiset(a, b):
         if count != 0:
             return False
     return True
+
+
+@njit(cache=True)
+def _stable_argsort(costs):
+    """Indices that sort ``costs``, ties by index: an insertion sort, which for the
+    small populations of a GA is quick and compiles far faster than np.argsort."""
+    n = costs.shape[0]
+    order = np.arange(n)
+    for i in range(1, n):
+        k = order[i]
+        j = i
+        while j > 0 and costs[k] < costs[order[j - 1]]:
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = k
+    return order
 
 
 @njit(cache=True)
@@ -168,7 +184,7 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
     for step in range(n_gens):
         if best_cost[0] <= target or counters[_GEN] - counters[_LAST_IMPROVE] >= stall_limit:
             break
-        order = np.argsort(costs)
+        order = _stable_argsort(costs)
         for e in range(n_elite):
             src = order[e]
             new_pop[e, : lengths[src]] = pop[src, : lengths[src]]
