@@ -101,7 +101,7 @@ def int_in(low: int, high: int) -> Any:
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
         if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"expected a whole number in [{low}, {high}], "
+            raise argparse.ArgumentTypeError(f"expected a whole number >= {low} and <= {high}, "
                                              f"got {text!r}")
         return value
     parse.__name__ = "int"

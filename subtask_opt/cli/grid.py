@@ -18,14 +18,19 @@ from typing import Any
 
 from subtask_opt.cli._common import (
     EXIT_OK,
+    MAX_GENERATIONS,
+    MAX_RUNTIME_S,
+    MAX_STALL,
     add_no_progress,
     add_outputs,
     failed,
+    float_in,
+    int_in,
     point,
-    positive_float,
     positive_int,
     refuse_overwriting_inputs,
     seed,
+    stop_criteria,
     write_json,
 )
 
@@ -108,25 +113,14 @@ def _add_stop_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "stopping", f"for the iterative planners ({iterative}); the first criterion met stops "
                     "the run; none given: the planner's default")
-    g.add_argument("--generations", type=positive_int, default=None,
-                   help="at most this many generations")
-    g.add_argument("--stall", type=positive_int, default=None,
-                   help="stop after this many generations without improvement")
-    g.add_argument("--time-limit", type=positive_float, default=None, metavar="S",
+    # the shared criteria (stop_criteria) under this command's option names
+    g.add_argument("--generations", dest="max_generations", type=int_in(1, MAX_GENERATIONS),
+                   default=None, help=f"at most this many generations (<= {MAX_GENERATIONS})")
+    g.add_argument("--stall", dest="no_improvement", type=int_in(1, MAX_STALL), default=None,
+                   help=f"stop after this many generations without improvement (<= {MAX_STALL})")
+    g.add_argument("--time-limit", dest="max_runtime",
+                   type=float_in(0.0, MAX_RUNTIME_S, open_low=True), default=None, metavar="S",
                    help="stop after S seconds")
-
-
-def _stop(args: argparse.Namespace) -> list[Any] | None:
-    from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement
-
-    stop: list[Any] = []
-    if args.generations is not None:
-        stop.append(MaxGenerations(args.generations))
-    if args.stall is not None:
-        stop.append(NoImprovement(args.stall))
-    if args.time_limit is not None:
-        stop.append(MaxRuntime(args.time_limit))
-    return stop or None
 
 
 def load_grid(spec: str) -> tuple[Any, tuple[int, int] | None, tuple[int, int] | None, int]:
@@ -155,7 +149,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     goal = args.goal if args.goal is not None else goal
     if start is None or goal is None:
         raise ParameterError(f"--start and --goal are required for the map file {args.map!r}")
-    report = plan_report(world, start, goal, args.planner, seed=args.seed, stop=_stop(args),
+    report = plan_report(world, start, goal, args.planner, seed=args.seed, stop=stop_criteria(args),
                          border=border)
     print(f"map {world.name or args.map} ({world.width}x{world.height}), "
           f"start {report.start}, goal {report.goal}")
