@@ -59,7 +59,8 @@ def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
                              f"got {type(value).__name__}") from None
     if arr.ndim != len(shape) or any(s is not None and a != s
                                      for a, s in zip(arr.shape, shape, strict=True)):
-        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + ")"
+        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + (
+            ",)" if len(shape) == 1 else ")")
         raise ParameterError(f"write_tour_html: {name} must have shape {want}, "
                              f"got {arr.shape}")
     if not np.all(np.isfinite(arr)):

@@ -1,0 +1,163 @@
+"""Figure of a serial-arm tour: targets and tool path in 3-D, and the time of every leg."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from subtask_opt.base.errors import ParameterError
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from subtask_opt.arm.scene import Scene
+    from subtask_opt.arm.serial import SerialArm
+
+MAX_NUMBERED = 60
+"""Above this many targets only every k-th visit is numbered (the figure stays readable)."""
+
+_BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
+              (0, 4), (1, 5), (2, 6), (3, 7)]
+
+
+def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"plot_serial_tour: {name} must be an array of numbers") from None
+    if arr.ndim != len(shape) or any(s is not None and a != s
+                                     for a, s in zip(arr.shape, shape, strict=True)):
+        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + (
+            ",)" if len(shape) == 1 else ")")
+        raise ParameterError(f"plot_serial_tour: {name} must have shape {want}, "
+                             f"got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"plot_serial_tour: {name} must be finite")
+    return arr
+
+
+def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: Any,
+                       order: Any, *, title: str = "", q_home: Any = None,
+                       scene: Scene | None = None) -> Figure:
+    """The figure of :func:`plot_serial_tour`, not saved (arguments as there)."""
+    import matplotlib.pyplot as plt
+
+    pts = _array("targets", targets, (None, 3))
+    n = pts.shape[0]
+    if n == 0:
+        raise ParameterError("plot_serial_tour: targets must hold at least one target")
+    path = _array("tool_path", tool_path, (None, 3))
+    if path.shape[0] < 2:
+        raise ParameterError(f"plot_serial_tour: tool_path needs at least 2 points, "
+                             f"got {path.shape[0]}")
+    legs = _array("leg_times", leg_times, (n + 1,))
+    if np.any(legs < 0):
+        raise ParameterError(f"plot_serial_tour: leg_times must be >= 0, got min "
+                             f"{legs.min()}")
+    o = np.asarray(order)
+    if o.shape != (n,) or not np.issubdtype(o.dtype, np.integer) or \
+            not np.array_equal(np.sort(o), np.arange(n)):
+        raise ParameterError(f"plot_serial_tour: order must be a permutation of 0..{n - 1}, "
+                             f"got {order!r}")
+    if not isinstance(title, str):
+        raise ParameterError(f"plot_serial_tour: title must be a string, got {title!r}")
+
+    fig = plt.figure(figsize=(13, 6.2))
+    grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1.0], wspace=0.18)
+    ax = fig.add_subplot(grid[0], projection="3d")
+    bar = fig.add_subplot(grid[1])
+
+    # 3-D: scene, tool path, targets numbered by visit, the arm at home
+    if scene is not None:
+        for k, box in enumerate(scene.boxes):
+            corners = np.array([box.center + box.rotation @ (np.array(
+                [1 if i & 1 else -1, 1 if i & 2 else -1, 1 if i & 4 else -1]) * box.half_extents)
+                for i in range(8)])
+            for a, b in _BOX_EDGES:
+                ax.plot(*corners[[a, b]].T, color="#868e96", lw=0.8,
+                        label="scene boxes" if k == 0 and (a, b) == (0, 1) else None)
+    ax.plot(*path.T, color="#1c7ed6", lw=1.0, label="tool path")
+    ax.scatter(*pts.T, color="#2b8a3e", s=18, depthshade=False, label=f"targets ({n})")
+    step = max(1, int(np.ceil(n / MAX_NUMBERED)))
+    for visit, i in enumerate(o):
+        if visit % step == 0 or visit == n - 1:
+            ax.text(*pts[i], f" {visit + 1}", fontsize=7, color="#1b4332")
+    ax.scatter(*path[0], marker="*", s=140, color="#c92a2a", depthshade=False,
+               label="tool at home (start and end)")
+    if q_home is not None:
+        from subtask_opt.plotting.arm3d import skeleton_points
+
+        q = _array("q_home", q_home, (arm.nq,))
+        skel = skeleton_points(arm, q[None])[0]
+        ax.plot(*skel.T, color="#e8590c", lw=4, solid_capstyle="round", label="arm at home")
+    every = np.vstack([pts, path])
+    lo, hi = every.min(axis=0), every.max(axis=0)
+    if q_home is not None:
+        lo, hi = np.minimum(lo, skel.min(axis=0)), np.maximum(hi, skel.max(axis=0))
+    mid, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 0.05)
+    ax.set_xlim(mid[0] - half, mid[0] + half)
+    ax.set_ylim(mid[1] - half, mid[1] + half)
+    ax.set_zlim(mid[2] - half, mid[2] + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    numbered = "numbers: visit order" + ("" if step == 1 else f" (every {step}th)")
+    ax.set_title(f"targets and tool path ({numbered})", fontsize=10)
+    ax.legend(loc="upper left", bbox_to_anchor=(-0.16, 1.0), fontsize=8, framealpha=0.85)
+
+    # per-leg times
+    x = np.arange(n + 1)
+    bar.bar(x, legs, color="#1c7ed6", width=0.8 if n < 100 else 1.0, label="leg time")
+    bar.axhline(legs.mean(), color="#c92a2a", lw=1, ls="--",
+                label=f"mean {legs.mean():.3f} s")
+    if n <= 20:
+        names = ["home"] + [f"t{i}" for i in o] + ["home"]
+        bar.set_xticks(x, [f"{names[k]}\u2192{names[k + 1]}" for k in x], rotation=60,
+                       fontsize=8, ha="right")
+        bar.set_xlabel("leg (from target \u2192 to target, t = target index)")
+    else:
+        bar.set_xlabel("leg number (0: home to first target, last: back home)")
+    bar.set_ylabel("leg time [s]")
+    bar.set_title(f"time per leg: {n + 1} legs, total {legs.sum():.3f} s", fontsize=10)
+    bar.legend(loc="upper right", fontsize=8)
+    bar.grid(axis="y", alpha=0.3)
+    fig.suptitle(title or f"{arm.name}: tour of {n} targets", fontsize=12)
+    return fig
+
+
+def plot_serial_tour(arm: SerialArm, targets: Any, tool_path: Any, leg_times: Any, order: Any,
+                     path: str | Path, *, title: str = "", q_home: Any = None,
+                     scene: Scene | None = None) -> Path:
+    """Write a figure of a serial-arm tour: a 3-D view and a bar chart of the leg times.
+
+    Args:
+        arm: the arm (its name titles the figure; ``q_home`` is drawn with it).
+        targets: (N, 3) target positions (m), numbered on the figure by visit order.
+        tool_path: (T, 3) tool positions along the executed tour (m); the first is
+            the tool at home.
+        leg_times: (N + 1,) times (s) of home -> first, ..., last -> home.
+        order: (N,) target indices in visiting order.
+        path: the image file (PNG, PDF, SVG by extension); folders are created.
+        title: the figure's title, saying what was run.
+        q_home: optional (n,) home configuration: the arm's links are drawn there.
+        scene: optional :class:`~subtask_opt.arm.scene.Scene` whose box edges are drawn.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ParameterError: shapes, non-finite or negative values, an order that is not a
+            permutation.
+    """
+    import matplotlib.pyplot as plt
+
+    fig = serial_tour_figure(arm, targets, tool_path, leg_times, order, title=title,
+                             q_home=q_home, scene=scene)
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return out
