@@ -5,7 +5,8 @@ every joint origin and of the tool point at each (sub-sampled) time step, embeds
 them as JSON in one HTML page together with the targets, their tool axes, the
 tool path and the scene's boxes, and adds a small renderer written for this page
 (HTML canvas 2-D with a perspective projection and painter's-algorithm depth
-order; no library, no CDN, no server). The page shows:
+order, box faces at their farthest corner so points on a face stay visible; no
+library, no CDN, no server). The page shows:
 
 * the arm as thick segments between consecutive joint origins (base, joint 1,
   ..., joint n, tool point), whose width follows the perspective (capsules seen
@@ -16,10 +17,11 @@ order; no library, no CDN, no server). The page shows:
 * a ground grid (0.1 m) at z = 0 and the base frame's x/y/z axes.
 
 Controls: play/pause, a time slider, a speed menu, mouse drag to rotate, wheel
-to zoom, double click to reset the view. The element ``#status`` reads
-``rendered frame 0 of F frames`` (attribute ``data-ok="1"``) once the first
-frame is drawn, or ``error: ...`` (``data-ok="0"``) when the script fails: the
-tests load the page in a headless Chromium and read it.
+to zoom, double click to reset the view; ``page.html#t=2.5`` opens at t = 2.5 s.
+The element ``#status`` reads ``rendered frame 0 of F frames`` (attribute
+``data-ok="1"``) once the first frame is drawn, or ``error: ...``
+(``data-ok="0"``) when the script fails: the tests load the page in a headless
+Chromium and read it.
 
 The page's size is bounded: at most ``max_frames`` frames (default 2000,
 evenly spaced in the index, first and last kept) with coordinates rounded to
@@ -365,7 +367,9 @@ _PAGE = r"""<!DOCTYPE html>
           var w = fc.map(function (i) { return b.corners[i]; });
           var n = norm(cross(sub(w[1], w[0]), sub(w[3], w[0])));
           var shade = 0.55 + 0.35 * Math.abs(dot(n, LIGHT));
-          var depth = (pts[0][2] + pts[1][2] + pts[2][2] + pts[3][2]) / 4;
+          // a face is painted at its farthest corner's depth: what lies on it or in
+          // front of any part of it (holes on a panel) is drawn over the translucent face
+          var depth = Math.max(pts[0][2], pts[1][2], pts[2][2], pts[3][2]);
           items.push({ d: depth, f: function () {
             var grey = Math.round(120 * shade + 40), blue = Math.round(160 * shade + 40);
             ctx.fillStyle = "rgba(" + grey + "," + grey + "," + blue + ",0.55)";
@@ -473,6 +477,8 @@ _PAGE = r"""<!DOCTYPE html>
     resize();
     draw();
     statusEl.textContent = "rendered frame 0 of " + T + " frames";
+    var m = /^#t=([0-9.]+)$/.exec(window.location.hash);  // open at a time: page.html#t=2.5
+    if (m) { tNow = parseFloat(m[1]); frame = frameAt(tNow); draw(); }
     statusEl.setAttribute("data-ok", "1");
   } catch (err) {
     fail(err && err.message ? err.message : String(err));

@@ -188,3 +188,13 @@ def test_browser_screenshot_shows_the_arm(page, tmp_path):
     # the panel's faces: light, bluish grey
     box_pixels = (img[..., 2] > img[..., 0] + 10) & (img[..., 2] < 230) & (img[..., 0] > 120)
     assert box_pixels.sum() > 2000
+
+
+@needs_chromium
+def test_browser_opens_at_a_time_from_the_address(page, tmp_path):
+    run = _chromium(page.as_uri() + "#t=1.5", tmp_path / "profile", "--dump-dom")
+    times = np.array(_embedded(page)["t"])
+    shown = times[times <= 1.5].max()  # the last frame not after t
+    match = re.search(r'<span id="clock">([^<]*)<', run.stdout)
+    assert match is not None and match.group(1) == f"t = {shown:.3f} s / 3.000 s"
+    assert _status(run.stdout)[0] == "1"
