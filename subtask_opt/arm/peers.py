@@ -36,7 +36,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError, ParameterError, require_int
+from subtask_opt.base.errors import (
+    InputDataError,
+    ParameterError,
+    require_in_range,
+    require_int,
+)
 
 if TYPE_CHECKING:
     from subtask_opt.arm.serial import SerialArm
@@ -449,7 +454,8 @@ def noon_bean_matrix(cost: np.ndarray, cluster: np.ndarray, *,
 
 
 def elkai_gtsp(layers: Sequence[Any], home: Any, leg_time: LegTime, *, seed: int = 0,
-               runs: int = 1, max_nodes: int = 2500) -> tuple[np.ndarray, np.ndarray]:
+               runs: int = 1, max_trials: int | None = None, time_limit: float | None = None,
+               max_nodes: int = 2500) -> tuple[np.ndarray, np.ndarray]:
     """The GTSP (order and configuration together) by LKH on its Noon-Bean ATSP.
 
     Clusters: the home (one node) and each target's layer. Arc costs are
@@ -461,6 +467,11 @@ def elkai_gtsp(layers: Sequence[Any], home: Any, leg_time: LegTime, *, seed: int
         layers: N arrays (K_i, n); home: (n,); leg_time: the leg-time function.
         seed: LKH's random seed (>= 0).
         runs: LKH's RUNS.
+        max_trials: LKH's MAX_TRIALS per run (None: LKH's default, the dimension).
+            Measured once on 40 random layers of 8..40 configurations (991 nodes):
+            the default took 45 s CPU; ``max_trials=200`` took 7.4 s for a tour 8%
+            longer than LKH's with its default trials (and no subgradient ascent).
+        time_limit: LKH's TIME_LIMIT (s) over the search, or None.
         max_nodes: refuse larger instances (1 + sum K_i nodes; the dense matrix
             is passed to LKH as text).
 
@@ -472,6 +483,10 @@ def elkai_gtsp(layers: Sequence[Any], home: Any, leg_time: LegTime, *, seed: int
     require_int(owner, "seed", seed, 0, 2**31 - 1)
     require_int(owner, "runs", runs, 1, 10_000)
     require_int(owner, "max_nodes", max_nodes, 2)
+    if max_trials is not None:
+        require_int(owner, "max_trials", max_trials, 1)
+    if time_limit is not None:
+        require_in_range(owner, "time_limit", time_limit, 1e-3, 1e7)
     nodes = np.vstack([h[None, :]] + lay)
     cluster = np.concatenate([[0]] + [np.full(layer.shape[0], i + 1)
                                       for i, layer in enumerate(lay)])
@@ -494,6 +509,10 @@ def elkai_gtsp(layers: Sequence[Any], home: Any, leg_time: LegTime, *, seed: int
                "EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n"
                + "\n".join(" ".join(map(str, row)) for row in mat.tolist()) + "\n")
     params = f"RUNS = {runs}\nSEED = {seed}\nPROBLEM_FILE = :stdin:\n"
+    if max_trials is not None:
+        params += f"MAX_TRIALS = {max_trials}\n"
+    if time_limit is not None:
+        params += f"TIME_LIMIT = {time_limit}\n"
     tour = np.asarray(_elkai.solve_problem(params, problem), dtype=np.int64) - 1
     tour = np.roll(tour, -int(np.nonzero(tour == 0)[0][0]))
     entries = [int(u) for k, u in enumerate(tour)

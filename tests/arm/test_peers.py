@@ -182,6 +182,15 @@ def test_elkai_gtsp_same_seed_same_answer():
     np.testing.assert_array_equal(a[1], b[1])
 
 
+def test_elkai_gtsp_search_limits_still_give_a_valid_answer():
+    pytest.importorskip("elkai")
+    layers, home = _instance(12, n=15, kmax=4)
+    order, choice = elkai_gtsp(layers, home, max_joint_metric(VMAX), max_trials=1,
+                               time_limit=5.0)
+    assert sorted(order) == list(range(15))
+    assert all(0 <= choice[i] < layers[i].shape[0] for i in range(15))
+
+
 def test_elkai_gtsp_single_configuration():
     order, choice = elkai_gtsp([np.zeros((1, 4))], np.ones(4), max_joint_metric(VMAX))
     np.testing.assert_array_equal(order, [0])
@@ -283,6 +292,10 @@ def test_manipulability_zero_at_a_singularity():
     (lambda L, h: elkai_gtsp(L, h, max_joint_metric(VMAX), max_nodes=3), ParameterError,
      "exceed max_nodes=3"),
     (lambda L, h: elkai_gtsp(L, h, max_joint_metric(VMAX), seed=-1), ParameterError, "seed"),
+    (lambda L, h: elkai_gtsp(L, h, max_joint_metric(VMAX), max_trials=0), ParameterError,
+     "max_trials"),
+    (lambda L, h: elkai_gtsp(L, h, max_joint_metric(VMAX), time_limit=0.0), ParameterError,
+     "time_limit"),
     (lambda L, h: two_opt(np.zeros((3, 4)), [0, 1, 2]), ParameterError, "dist must be square"),
     (lambda L, h: elkai_gtsp(L, h, "fast"), ParameterError, "leg_time must be a callable"),
 ])
