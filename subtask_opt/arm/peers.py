@@ -19,7 +19,8 @@ on one time model.
   same shortest path as a dynamic programme, O(N K^2).
 * :func:`tsp_cspace` -- "TSP in C-space": the highest-manipulability
   configuration per target, then a TSP on the joint-space leg-time matrix
-  (nearest neighbour, then 2-opt and Or-opt until neither improves).
+  (nearest neighbour, then 2-opt and Or-opt until neither improves; or LKH by
+  ``solver="elkai"``).
 * :func:`elkai_gtsp` -- the generalised TSP through the Noon-Bean transformation
   into an asymmetric TSP, solved by LKH (the ``elkai`` package, an optional
   ``bench`` dependency), a stand-in for GLKH.
@@ -380,7 +381,8 @@ def robotsp_method(positions: Any, layers: Sequence[Any], home: Any, vmax: Any,
 
 def tsp_cspace(layers: Sequence[Any], home: Any,
                manipulability: Sequence[Any] | Callable[[np.ndarray], np.ndarray],
-               leg_time: LegTime) -> tuple[np.ndarray, np.ndarray]:
+               leg_time: LegTime, *, solver: str = "local",
+               seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """"TSP in C-space": best-manipulability configuration per target, then a joint-space TSP.
 
     Args:
@@ -389,12 +391,18 @@ def tsp_cspace(layers: Sequence[Any], home: Any,
         manipulability: N arrays (K_i,) of scores, or a function of a (K, n) layer
             returning (K,) scores (e.g. ``lambda q: manipulability(arm, q)``).
         leg_time: the leg-time function of the TSP's matrix.
+        solver: ``"local"`` (nearest neighbour from home, then 2-opt and Or-opt
+            until neither improves; NumPy, deterministic) or ``"elkai"`` (LKH on
+            the matrix rounded to 1e-5 of its longest leg; needs elkai).
+        seed: LKH's seed (``solver="elkai"`` only).
 
     Returns:
-        ``(order, choice)``; the tour is nearest neighbour from home, then 2-opt and
-        Or-opt until neither improves.
+        ``(order, choice)``.
     """
     owner = "tsp_cspace"
+    if solver not in ("local", "elkai"):
+        raise ParameterError(f"{owner}: solver must be 'local' or 'elkai', got {solver!r}")
+    require_int(owner, "seed", seed, 0, 2**31 - 1)
     lay, h = _layers(owner, layers, home)
     choice = np.empty(len(lay), dtype=np.int64)
     for i, layer in enumerate(lay):
@@ -412,8 +420,37 @@ def tsp_cspace(layers: Sequence[Any], home: Any,
     nodes = np.vstack([h[None, :]] + [layer[c][None, :] for layer, c in zip(lay, choice,
                                                                              strict=True)])
     dist = _leg_matrix(owner, leg_time, nodes, nodes)
-    tour = local_search(dist, nearest_neighbour_tour(dist, 0))
+    if solver == "elkai" and len(lay) >= 2:
+        top = float(dist.max())
+        mat = np.rint(dist * (1e5 / top if top > 0 else 1.0)).astype(np.int64)
+        tour = _lkh_tour(owner, mat, seed=seed, runs=1, max_trials=None, time_limit=None)
+    else:
+        tour = local_search(dist, nearest_neighbour_tour(dist, 0))
     return tour[1:] - 1, choice
+
+
+def _lkh_tour(owner: str, mat: np.ndarray, *, seed: int, runs: int, max_trials: int | None,
+              time_limit: float | None) -> np.ndarray:
+    """LKH's tour (rotated to start at node 0) of an integer matrix with >= 3 nodes."""
+    try:
+        from elkai import _elkai  # type: ignore[import-untyped]
+    except ImportError:
+        raise ParameterError(f"{owner} needs the elkai package (pip install "
+                             "'subtask_opt[bench]')") from None
+    m = mat.shape[0]
+    kind = "TSP" if np.array_equal(mat, mat.T) else "ATSP"
+    problem = (f"TYPE : {kind}\nDIMENSION : {m}\nEDGE_WEIGHT_TYPE : EXPLICIT\n"
+               "EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n"
+               + "\n".join(" ".join(map(str, row)) for row in mat.tolist()) + "\n")
+    params = f"RUNS = {runs}\nSEED = {seed}\nPROBLEM_FILE = :stdin:\n"
+    if max_trials is not None:
+        params += f"MAX_TRIALS = {max_trials}\n"
+    if time_limit is not None:
+        params += f"TIME_LIMIT = {time_limit}\n"
+    tour = np.asarray(_elkai.solve_problem(params, problem), dtype=np.int64) - 1
+    if tour.shape != (m,) or not np.array_equal(np.sort(tour), np.arange(m)):
+        raise RuntimeError(f"{owner}: LKH returned no permutation of the {m} nodes")
+    return np.roll(tour, -int(np.nonzero(tour == 0)[0][0]))
 
 
 def noon_bean_matrix(cost: np.ndarray, cluster: np.ndarray, *,
@@ -498,23 +535,10 @@ def elkai_gtsp(layers: Sequence[Any], home: Any, leg_time: LegTime, *, seed: int
     cost = _leg_matrix(owner, leg_time, nodes, nodes)
     if m < 3:  # one target with one configuration: nothing to choose
         return np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64)
-    try:
-        from elkai import _elkai  # type: ignore[import-untyped]
-    except ImportError:
-        raise ParameterError(f"{owner} needs the elkai package (pip install "
-                             "'subtask_opt[bench]')") from None
     # LKH's ATSP -> TSP transformation needs arcs well below INT_MAX / 2 / PRECISION.
     mat, _, _ = noon_bean_matrix(cost, cluster, resolution=min(1e4, 2e6 / (len(lay) + 2)))
-    problem = (f"TYPE : ATSP\nDIMENSION : {m}\nEDGE_WEIGHT_TYPE : EXPLICIT\n"
-               "EDGE_WEIGHT_FORMAT : FULL_MATRIX\nEDGE_WEIGHT_SECTION\n"
-               + "\n".join(" ".join(map(str, row)) for row in mat.tolist()) + "\n")
-    params = f"RUNS = {runs}\nSEED = {seed}\nPROBLEM_FILE = :stdin:\n"
-    if max_trials is not None:
-        params += f"MAX_TRIALS = {max_trials}\n"
-    if time_limit is not None:
-        params += f"TIME_LIMIT = {time_limit}\n"
-    tour = np.asarray(_elkai.solve_problem(params, problem), dtype=np.int64) - 1
-    tour = np.roll(tour, -int(np.nonzero(tour == 0)[0][0]))
+    tour = _lkh_tour(owner, mat, seed=seed, runs=runs, max_trials=max_trials,
+                     time_limit=time_limit)
     entries = [int(u) for k, u in enumerate(tour)
                if cluster[u] != cluster[tour[k - 1]] and cluster[u] != 0]
     order = np.array([cluster[u] - 1 for u in entries], dtype=np.int64)

@@ -248,6 +248,20 @@ def test_tsp_cspace_picks_best_manipulability_then_a_local_optimum():
     np.testing.assert_array_equal(by_call, [int(np.argmax(layer[:, 0])) for layer in layers])
 
 
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_tsp_cspace_with_lkh_equals_brute_force(symmetric):
+    pytest.importorskip("elkai")
+    layers, home = _instance(9, n=7, kmax=3)
+    leg = max_joint_metric(VMAX) if symmetric else _asymmetric(9)
+    order, choice = tsp_cspace(layers, home, lambda q: q[:, 1], leg, solver="elkai", seed=3)
+    chosen = [layer[c] for layer, c in zip(layers, choice, strict=True)]
+    best = min(_path_cost(home, [chosen[i] for i in perm], leg)
+               for perm in itertools.permutations(range(7)))
+    nodes = np.vstack([home[None], *chosen])
+    tol = 8 * leg(nodes, nodes).max() / 1e5  # integer rounding of the arcs
+    assert _path_cost(home, [chosen[i] for i in order], leg) <= best + tol
+
+
 def test_manipulability_zero_at_a_singularity():
     from subtask_opt.arm.serial import load_serial_arm
 
@@ -289,6 +303,8 @@ def test_manipulability_zero_at_a_singularity():
      "one array per layer"),
     (lambda L, h: tsp_cspace(L, h, lambda q: np.ones(1), max_joint_metric(VMAX)),
      ParameterError, "manipulability of target 0"),
+    (lambda L, h: tsp_cspace(L, h, lambda q: q[:, 0], max_joint_metric(VMAX), solver="lkh"),
+     ParameterError, "solver must be 'local' or 'elkai'"),
     (lambda L, h: elkai_gtsp(L, h, max_joint_metric(VMAX), max_nodes=3), ParameterError,
      "exceed max_nodes=3"),
     (lambda L, h: elkai_gtsp(L, h, max_joint_metric(VMAX), seed=-1), ParameterError, "seed"),
