@@ -1,4 +1,5 @@
-"""Figure of a serial-arm tour: targets and tool path in 3-D, and the time of every leg."""
+"""Figure of a serial-arm tour: targets and tool path in 3-D, the targets in their plane, and
+the time of every leg."""
 
 from __future__ import annotations
 
@@ -16,7 +17,10 @@ if TYPE_CHECKING:
     from subtask_opt.arm.serial import SerialArm
 
 MAX_NUMBERED = 60
-"""Above this many targets only every k-th visit is numbered (the figure stays readable)."""
+"""Above this many targets only every k-th visit is numbered in the plane view."""
+
+MAX_NUMBERED_3D = 20
+"""Above this many targets the 3-D view carries no numbers (the plane view does)."""
 
 _BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
               (0, 4), (1, 5), (2, 6), (3, 7)]
@@ -36,6 +40,34 @@ def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"plot_serial_tour: {name} must be finite")
     return arr
+
+
+def target_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Best-fit plane of (N, 3) points: (centroid, unit u, unit v, largest distance off it).
+
+    The plane's normal is the points' least principal direction. Its in-plane axes
+    follow the base frame so the picture reads naturally: v is "up" (the base z axis
+    projected on the plane) unless the plane is nearly horizontal, where u and v
+    follow the projected x axis; each axis is signed so its largest component is
+    positive.
+    """
+    origin = points.mean(axis=0)
+    centred = points - origin
+    normal = np.linalg.svd(centred, full_matrices=True)[2][2]
+
+    def along(w: np.ndarray) -> np.ndarray:
+        e = w - (w @ normal) * normal
+        e = e / np.linalg.norm(e)
+        return e if e[int(np.argmax(np.abs(e)))] > 0 else -e
+
+    if abs(float(normal[2])) < 0.9:
+        v = along(np.array([0.0, 0.0, 1.0]))
+        u = along(np.cross(v, normal))
+    else:
+        u = along(np.array([1.0, 0.0, 0.0]))
+        v = along(np.cross(normal, u))
+    off = float(np.abs(centred @ normal).max())
+    return origin, u, v, off
 
 
 def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: Any,
@@ -64,10 +96,12 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     if not isinstance(title, str):
         raise ParameterError(f"plot_serial_tour: title must be a string, got {title!r}")
 
-    fig = plt.figure(figsize=(13, 6.2))
-    grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1.0], wspace=0.18)
-    ax = fig.add_subplot(grid[0], projection="3d")
-    bar = fig.add_subplot(grid[1])
+    fig = plt.figure(figsize=(13, 11))
+    grid = fig.add_gridspec(2, 2, width_ratios=[1.15, 1.0], height_ratios=[1.2, 1.0],
+                            wspace=0.2, hspace=0.3)
+    ax = fig.add_subplot(grid[0, 0], projection="3d")
+    flat = fig.add_subplot(grid[0, 1])
+    bar = fig.add_subplot(grid[1, :])
 
     # 3-D: scene, tool path, targets numbered by visit, the arm at home
     if scene is not None:
@@ -81,8 +115,8 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     ax.plot(*path.T, color="#1c7ed6", lw=1.0, label="tool path")
     ax.scatter(*pts.T, color="#2b8a3e", s=18, depthshade=False, label=f"targets ({n})")
     step = max(1, int(np.ceil(n / MAX_NUMBERED)))
-    for visit, i in enumerate(o):
-        if visit % step == 0 or visit == n - 1:
+    if n <= MAX_NUMBERED_3D:
+        for visit, i in enumerate(o):
             ax.text(*pts[i], f" {visit + 1}", fontsize=7, color="#1b4332")
     ax.scatter(*path[0], marker="*", s=140, color="#c92a2a", depthshade=False,
                label="tool at home (start and end)")
@@ -104,9 +138,30 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
-    numbered = "numbers: visit order" + ("" if step == 1 else f" (every {step}th)")
-    ax.set_title(f"targets and tool path ({numbered})", fontsize=10)
+    ax.set_title("targets and tool path" + (" (numbers: visit order)" if n <= MAX_NUMBERED_3D
+                                             else ""), fontsize=10)
     ax.legend(loc="upper left", bbox_to_anchor=(-0.16, 1.0), fontsize=8, framealpha=0.85)
+
+    # the targets in their best-fit plane, joined in visiting order
+    origin, e1, e2, off = target_plane(pts)
+    uv = (pts - origin) @ np.column_stack([e1, e2])
+    flat.plot(*uv[o].T, "-", color="#1c7ed6", lw=1.0, label="visiting order")
+    flat.scatter(uv[:, 0], uv[:, 1], color="#2b8a3e", s=16, zorder=3, label="targets")
+    flat.scatter(uv[o[0], 0], uv[o[0], 1], s=90, facecolor="none", edgecolor="#c92a2a", lw=1.5, zorder=4,
+                 label="first target")
+    for visit, i in enumerate(o):
+        if visit % step == 0 or visit == n - 1:
+            flat.annotate(str(visit + 1), uv[i], textcoords="offset points", xytext=(3, 3),
+                          fontsize=7, color="#1b4332")
+    flat.set_aspect("equal", adjustable="datalim")
+    e1, e2 = np.round(e1, 2) + 0.0, np.round(e2, 2) + 0.0  # no "-0.00" in the labels
+    flat.set_xlabel(f"u [m], along ({e1[0]:.2f}, {e1[1]:.2f}, {e1[2]:.2f}) in the base frame")
+    flat.set_ylabel(f"v [m], along ({e2[0]:.2f}, {e2[1]:.2f}, {e2[2]:.2f})")
+    numbered = "numbers: visit order" + ("" if step == 1 else f", every {step}th")
+    flat.set_title(f"targets in their best-fit plane, farthest {1000 * off:.1f} mm off it\n"
+                   f"({numbered})", fontsize=10)
+    flat.legend(loc="best", fontsize=8, framealpha=0.85)
+    flat.grid(alpha=0.3)
 
     # per-leg times
     x = np.arange(n + 1)

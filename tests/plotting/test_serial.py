@@ -36,7 +36,7 @@ def test_figure_draws_its_inputs(ur5):
                              half_extents=np.array([0.2, 0.25, 0.01]), rotation=np.eye(3)),))
     fig = serial_tour_figure(ur5, targets, path, legs, order, title="UR5, 8 holes",
                              q_home=HOME, scene=scene)
-    ax3, bar = fig.axes
+    ax3, flat, bar = fig.axes
     assert fig._suptitle.get_text() == "UR5, 8 holes"
     assert (ax3.get_xlabel(), ax3.get_ylabel(), ax3.get_zlabel()) == ("x [m]", "y [m]", "z [m]")
     assert bar.get_ylabel() == "leg time [s]" and "total" in bar.get_title()
@@ -66,10 +66,34 @@ def test_many_targets_numbered_sparsely(ur5, tmp_path):
                            title="245 holes")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     fig = serial_tour_figure(ur5, targets, path, legs, order)
-    numbers = sorted(int(t.get_text()) for t in fig.axes[0].texts)
+    assert not fig.axes[0].texts  # no numbers in 3-D at this size
+    numbers = sorted(int(t.get_text()) for t in fig.axes[1].texts)
     assert numbers[0] == 1 and numbers[-1] == 245 and len(numbers) <= 62
     import matplotlib.pyplot as plt
 
+    plt.close(fig)
+
+
+def test_plane_view_keeps_distances_of_planar_targets(ur5):
+    import matplotlib.pyplot as plt
+
+    rng = np.random.default_rng(4)
+    tilt = np.radians(30.0)
+    u, v = np.array([np.cos(tilt), 0.0, np.sin(tilt)]), np.array([0.0, 1.0, 0.0])
+    targets = np.array([0.5, 0.1, 0.2]) + np.outer(rng.uniform(-0.1, 0.1, 9), u) + \
+        np.outer(rng.uniform(-0.1, 0.1, 9), v)
+    order = rng.permutation(9)
+    path = np.vstack([targets[order[0]], *targets[order]])
+    fig = serial_tour_figure(ur5, targets, path, np.ones(10), order)
+    flat = fig.axes[1]
+    line = [ln for ln in flat.get_lines() if ln.get_label() == "visiting order"][0]
+    uv = np.column_stack(line.get_data())
+    np.testing.assert_allclose(np.linalg.norm(np.diff(uv, axis=0), axis=1),
+                               np.linalg.norm(np.diff(targets[order], axis=0), axis=1))
+    assert "farthest 0.0 mm off it" in flat.get_title()
+    # the panel leans 30 degrees from horizontal: "up" in the picture is up the slope
+    assert "v [m], along (0.87, 0.00, 0.50)" in flat.get_ylabel()
+    assert "u [m], along (0.00, 1.00, 0.00)" in flat.get_xlabel()
     plt.close(fig)
 
 
