@@ -110,7 +110,7 @@ def _rounded(arr: np.ndarray) -> Any:
 
 
 def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, axes: Any = None,
-                   scene: Scene | None = None, title: str = "",
+                   scene: Scene | None = None, title: str = "", order: Any = None,
                    max_frames: int = MAX_FRAMES) -> dict[str, Any]:
     """The JSON document :func:`write_tour_html` embeds (validated; see its arguments)."""
     from subtask_opt.arm.scene import Scene
@@ -144,6 +144,16 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
         ax = ax / norms[:, None]
     else:
         ax = np.zeros((0, 3))
+    labels = [str(i) for i in range(pts.shape[0])]
+    if order is not None:
+        o = np.asarray(order)
+        n = pts.shape[0]
+        if o.shape != (n,) or not np.issubdtype(o.dtype, np.integer) or \
+                not np.array_equal(np.sort(o), np.arange(n)):
+            raise ParameterError(f"write_tour_html: order must be a permutation of the "
+                                 f"{n} target indices, got {order!r}")
+        for visit, i in enumerate(o):
+            labels[int(i)] = str(visit + 1)
     idx = frame_indices(t.size, max_frames)
     skel = skeleton_points(arm, qa[idx])
     boxes = [] if scene is None else [{"name": b.name, "corners": _box_corners(b)}
@@ -155,6 +165,8 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
         "frames": _rounded(skel.reshape(len(idx), -1)),
         "n_points": int(skel.shape[1]),
         "targets": _rounded(pts),
+        "labels": labels,
+        "label_kind": "index" if order is None else "visit number",
         "axes": _rounded(ax),
         "boxes": boxes,
         "source_frames": int(t.size),
@@ -163,7 +175,7 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
 
 def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
                     targets: Any = None, axes: Any = None, scene: Scene | None = None,
-                    title: str = "", max_frames: int = MAX_FRAMES) -> Path:
+                    title: str = "", order: Any = None, max_frames: int = MAX_FRAMES) -> Path:
     """Write an offline HTML animation of ``arm`` moving through ``q`` at ``times``.
 
     Args:
@@ -171,10 +183,12 @@ def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
         arm: the arm (:func:`~subtask_opt.arm.serial.load_serial_arm`).
         times: (T,) non-decreasing times (s).
         q: (T, nq) joint positions (rad, m) at those times.
-        targets: optional (N, 3) target positions (m, base frame), drawn numbered.
+        targets: optional (N, 3) target positions (m, base frame), drawn numbered:
+            by index, or by visit (1 = first) when ``order`` is given.
         axes: optional (N, 3) tool axes at the targets (drawn as short lines).
         scene: optional :class:`~subtask_opt.arm.scene.Scene` whose boxes are drawn.
         title: the page's heading (default: robot and target count).
+        order: optional (N,) target indices in visiting order (labels the targets).
         max_frames: most frames embedded (sub-sampled evenly, first and last kept).
 
     Returns:
@@ -184,7 +198,7 @@ def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
         ParameterError: a shape, a non-finite value, decreasing times, zero axes.
     """
     data = tour_view_data(arm, times, q, targets=targets, axes=axes, scene=scene, title=title,
-                          max_frames=max_frames)
+                          order=order, max_frames=max_frames)
     # "</" cannot close the script element inside JSON once the slash is escaped.
     blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     page = (_PAGE.replace("@TITLE@", html.escape(data["title"]))
@@ -229,7 +243,8 @@ _PAGE = r"""<!DOCTYPE html>
         arm links (joint origins)</div>
       <div><span class="sw" style="background:#1c7ed6"></span>tool path, executed</div>
       <div><span class="sw" style="background:#adb5bd"></span>tool path, to come</div>
-      <div><span class="sw dot"></span>targets (index) and tool axes</div>
+      <div><span class="sw dot"></span>targets (<span id="label-kind">index</span>) and
+        tool axes</div>
       <div><span class="sw" style="background:rgba(120,120,160,0.5);height:10px"></span>
         scene boxes</div>
       <div id="scale"></div>
@@ -260,10 +275,12 @@ _PAGE = r"""<!DOCTYPE html>
   try {
     var D = JSON.parse(document.getElementById("tour-data").textContent);
     var T = D.t.length, P = D.n_points;
-    if (!(T >= 1) || D.frames.length !== T || D.frames[0].length !== 3 * P) {
+    if (!(T >= 1) || D.frames.length !== T || D.frames[0].length !== 3 * P ||
+        D.labels.length !== D.targets.length) {
       throw new Error("malformed tour data");
     }
     var LINK = "@LINK_COLOUR@";
+    document.getElementById("label-kind").textContent = D.label_kind;
     var canvas = document.getElementById("canvas");
     var ctx = canvas.getContext("2d");
     var slider = document.getElementById("slider");
@@ -400,7 +417,7 @@ _PAGE = r"""<!DOCTYPE html>
           if (e) line(a, e, "#2b8a3e", 1.5);
           disc(a, 4, "#2b8a3e");
           ctx.fillStyle = "#1b4332"; ctx.font = "11px sans-serif";
-          ctx.fillText(String(i), a[0] + 5, a[1] - 5);
+          ctx.fillText(D.labels[i], a[0] + 5, a[1] - 5);
         } });
       });
       // the arm: thick segments (capsules), joints as dots

@@ -147,8 +147,8 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     uv = (pts - origin) @ np.column_stack([e1, e2])
     flat.plot(*uv[o].T, "-", color="#1c7ed6", lw=1.0, label="visiting order")
     flat.scatter(uv[:, 0], uv[:, 1], color="#2b8a3e", s=16, zorder=3, label="targets")
-    flat.scatter(uv[o[0], 0], uv[o[0], 1], s=90, facecolor="none", edgecolor="#c92a2a", lw=1.5, zorder=4,
-                 label="first target")
+    flat.scatter(uv[o[0], 0], uv[o[0], 1], s=90, facecolor="none", edgecolor="#c92a2a",
+                 lw=1.5, zorder=4, label="first target")
     for visit, i in enumerate(o):
         if visit % step == 0 or visit == n - 1:
             flat.annotate(str(visit + 1), uv[i], textcoords="offset points", xytext=(3, 3),

@@ -65,6 +65,7 @@ def test_embedded_points_are_the_forward_kinematics(ur5, tmp_path):
     # the shoulder pan joint sits on the base z axis at the URDF's height, whatever q
     np.testing.assert_allclose(frames[:, 1, :2], 0.0, atol=1e-12)
     np.testing.assert_allclose(data["axes"], [[0.0, 0.0, -1.0]])  # normalised
+    assert data["labels"] == ["0"] and data["label_kind"] == "index"
     corners = np.array(data["boxes"][0]["corners"])
     np.testing.assert_allclose(corners.min(axis=0), [0.3, 0.1, 0.19])
     np.testing.assert_allclose(corners.max(axis=0), [0.7, 0.5, 0.21])
@@ -79,6 +80,12 @@ def test_page_is_self_contained_and_bounded(ur5, tmp_path):
     assert len(data["t"]) == 300 and data["source_frames"] == 5000
     assert data["t"][0] == 0.0 and data["t"][-1] == 3.0
     assert out.stat().st_size < 300 * (ur5.nq + 2) * 3 * 9 + 20_000
+
+
+def test_targets_labelled_by_visit(ur5):
+    t, q = _tour(3)
+    data = tour_view_data(ur5, t, q, targets=np.zeros((4, 3)), order=[2, 0, 3, 1])
+    assert data["labels"] == ["2", "4", "1", "3"] and data["label_kind"] == "visit number"
 
 
 def test_title_cannot_break_out_of_the_page(ur5, tmp_path):
@@ -110,6 +117,7 @@ def test_frame_indices(count, most):
     ({"max_frames": 1}, "max_frames"),
     ({"scene": "panel.json"}, "scene must be a Scene"),
     ({"title": 3}, "title must be a string"),
+    ({"targets": np.zeros((3, 3)), "order": [0, 1, 1]}, "order must be a permutation"),
     ({"arm": "ur5"}, "arm must be a SerialArm"),
 ])
 def test_bad_input(ur5, kwargs, match):
