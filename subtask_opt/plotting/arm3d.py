@@ -306,7 +306,14 @@ _PAGE = r"""<!DOCTYPE html>
     var extent = Math.max(hi[0] - lo[0], hi[1] - lo[1], 0.2);
     var gstep = extent <= 2 ? 0.1 : Math.pow(10, Math.floor(Math.log10(extent))) / 10;
     document.getElementById("scale").textContent = "ground grid " + gstep + " m (z = 0)";
-    var home = { az: -0.9, el: 0.45, dist: 2.6 * radius };
+    // start looking from the side, a little from the robot's side of the targets
+    var az0 = -0.9;
+    if (D.targets.length) {
+      var cx = 0, cy = 0;
+      D.targets.forEach(function (p) { cx += p[0]; cy += p[1]; });
+      if (Math.hypot(cx, cy) > 1e-9) az0 = Math.atan2(cy, cx) - 1.9;
+    }
+    var home = { az: az0, el: 0.45, dist: 2.6 * radius };
     var cam = { az: home.az, el: home.el, dist: home.dist };
     var W = 0, H = 0, F = 1, eye, R, U, Fw;
 
