@@ -206,3 +206,19 @@ def test_browser_opens_at_a_time_from_the_address(page, tmp_path):
     match = re.search(r'<span id="clock">([^<]*)<', run.stdout)
     assert match is not None and match.group(1) == f"t = {shown:.3f} s / 3.000 s"
     assert _status(run.stdout)[0] == "1"
+
+
+@needs_chromium
+def test_browser_draws_the_arm_where_it_is_at_that_time(page, tmp_path):
+    """The arm drawn at t = 3 s is not the arm at t = 0 (the animation data is used)."""
+    from PIL import Image
+
+    link = np.array([int(LINK_COLOUR[i:i + 2], 16) for i in (1, 3, 5)])
+    masks = []
+    for k, suffix in enumerate(("", "#t=3")):
+        shot = tmp_path / f"shot{k}.png"
+        _chromium(page.as_uri() + suffix, tmp_path / f"profile{k}", f"--screenshot={shot}")
+        img = np.asarray(Image.open(shot).convert("RGB")).astype(np.int64)
+        masks.append(np.all(np.abs(img - link) <= 12, axis=2))
+    moved = np.logical_xor(masks[0], masks[1]).sum()
+    assert moved > 0.3 * min(masks[0].sum(), masks[1].sum())
