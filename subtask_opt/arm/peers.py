@@ -225,15 +225,14 @@ def or_opt(dist: Any, tour: Any, max_segment: int = 3) -> np.ndarray:
     d = _square("or_opt", dist)
     n = d.shape[0]
     t = _tour("or_opt", tour, n).copy()
-    require_int("or_opt", "max_segment", max_segment, 1, max(n, 1))
-    scale = _EPS * max(float(np.abs(d).max()), 1.0)
+    require_int("or_opt", "max_segment", max_segment, 1)
+    scale = _EPS * max(float(np.abs(d).max()), 1.0) if n else 0.0
+    longest = min(max_segment, n - 2)  # a segment leaves at least two other nodes
     improved = True
     while improved:
         improved = False
-        for length in range(1, max_segment + 1):
+        for length in range(1, longest + 1):
             for i in range(1, n - length + 1):
-                if n - length < 2:
-                    break
                 s0, s1 = t[i], t[i + length - 1]
                 prev, nxt = t[i - 1], t[(i + length) % n]
                 inner_f = float(d[t[i:i + length - 1], t[i + 1:i + length]].sum())

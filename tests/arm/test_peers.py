@@ -262,6 +262,23 @@ def test_tsp_cspace_with_lkh_equals_brute_force(symmetric):
     assert _path_cost(home, [chosen[i] for i in order], leg) <= best + tol
 
 
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_peers_on_one_to_three_targets_equal_brute_force(n):
+    layers, home = _instance(20 + n, n=n, kmax=3)
+    leg = _asymmetric(n)
+    pos = np.random.default_rng(n).uniform(size=(n, 3))
+    order, choice = robotsp_method(pos, layers, home, VMAX, leg)
+    assert sorted(order) == list(range(n))
+    _, best = layered_shortest_path(layers, home, order, max_joint_metric(VMAX))
+    assert sequence_cost(layers, home, order, choice, max_joint_metric(VMAX)) == \
+        pytest.approx(best)
+    order, choice = tsp_cspace(layers, home, lambda q: q[:, 2], leg)
+    chosen = [layer[c] for layer, c in zip(layers, choice, strict=True)]
+    best = min(_path_cost(home, [chosen[i] for i in perm], leg)
+               for perm in itertools.permutations(range(n)))
+    assert _path_cost(home, [chosen[i] for i in order], leg) == pytest.approx(best)
+
+
 def test_manipulability_zero_at_a_singularity():
     from subtask_opt.arm.serial import load_serial_arm
 
