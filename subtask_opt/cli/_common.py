@@ -258,12 +258,15 @@ def ensure_parent(path: str | Path) -> Path:
     return path
 
 
-def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs") -> None:
+def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs",
+                serial_default: bool = False) -> None:
     """``--scheduler ADDRESS | --workers N``: where :func:`workers_options` runs ``what``.
 
     The same group on ``batch``, ``bench reactive``, ``bench agv`` and the
     benchmark scripts: no option runs on local workers, one per core (a Dask
     LocalCluster, or a process pool without dask); ``--workers 0`` runs here.
+    ``serial_default``: no option runs here (benchmarks whose per-solve times
+    would change if solves shared the cores).
     """
     where = parser.add_argument_group(
         "where to run", f"{what} run on local worker processes (a Dask cluster, or a "
@@ -272,8 +275,10 @@ def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs") -> N
     group.add_argument("--scheduler", metavar="ADDRESS",
                        help="address of a running dask scheduler, e.g. tcp://head:8786 "
                             "(needs pip install subtask_opt[cluster])")
+    default = "0" if serial_default else "the machine's cores"
     group.add_argument("--workers", type=non_negative_int, metavar="N",
-                       help="local worker processes (default: the machine's cores; "
+                       default=0 if serial_default else None,
+                       help=f"local worker processes (default: {default}; "
                             "0 runs in this process)")
 
 
