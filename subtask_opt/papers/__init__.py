@@ -1,6 +1,7 @@
 """Reproductions of the five source papers: :func:`reproduce` runs one paper's experiments.
 
-Each paper module (``p000_grid`` ... ``p004_agv``) runs that paper's
+Each paper module (``p000_grid`` ... ``p004_agv``) has
+``run(out, *, quick, seed, map_runs) -> (rows, figure paths)``; it runs that paper's
 experiments with its parameters on the library's planners and solvers,
 writes its figures, and returns one :class:`~subtask_opt.papers.report.Row`
 per numbered result of the paper: the paper's value, ours and the deviation
@@ -52,10 +53,7 @@ def reproduce(paper: str, out: str | Path, *, quick: bool = False, seed: int = 0
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
-    kwargs: dict[str, Any] = {"quick": quick, "seed": seed}
-    if map_runs is not None:
-        kwargs["map_runs"] = map_runs
-    rows, files = module.run(folder, **kwargs)
+    rows, files = module.run(folder, quick=quick, seed=seed, map_runs=map_runs)
     report = PaperReport(paper, module.TITLE, tuple(rows),
                          files=tuple(str(f) for f in files), quick=quick,
                          seconds=time.perf_counter() - start)

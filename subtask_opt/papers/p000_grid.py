@@ -122,7 +122,8 @@ def generation_rows(seed: int, seeds: int) -> list[Row]:
                 "runs", f"thesis GA preset, 6 maps x {seeds} seeds (the thesis: all)")]
 
 
-def run(out: Path, *, quick: bool = False, seed: int = 0) -> tuple[list[Row], list[Path]]:
+def run(out: Path, *, quick: bool = False, seed: int = 0,
+        map_runs: Any = None) -> tuple[list[Row], list[Path]]:
     """Every numbered result of the thesis beside ours; figures into ``out``."""
     fig_rows, field = fig_2_4_rows()
     rows = list(fig_rows)

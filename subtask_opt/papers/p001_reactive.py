@@ -9,6 +9,7 @@ The scenarios' geometry is not printed; the project's built-in scenarios
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from subtask_opt.papers.report import Row
 
@@ -23,7 +24,8 @@ SCENARIOS = (
 )
 
 
-def run(out: Path, *, quick: bool = False, seed: int = 0) -> tuple[list[Row], list[Path]]:
+def run(out: Path, *, quick: bool = False, seed: int = 0,
+        map_runs: Any = None) -> tuple[list[Row], list[Path]]:
     """Table 1 and the scenarios' outcomes; figures into ``out``."""
     from subtask_opt.planners.reactive.fuzzy import table1
     from subtask_opt.planners.reactive.scenarios import paper_scenario

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import statistics
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,7 +34,8 @@ def canonical(order: np.ndarray) -> tuple[int, ...]:
     return tuple(min(t, back))
 
 
-def run(out: Path, *, quick: bool = False, seed: int = 0) -> tuple[list[Row], list[Path]]:
+def run(out: Path, *, quick: bool = False, seed: int = 0,
+        map_runs: Any = None) -> tuple[list[Row], list[Path]]:
     """Both experiments from ``5`` (quick) or ``20`` seeds; figures into ``out``."""
     from subtask_opt import SequencingProblem, SolverParams, builtin_case, load_arm, solve
     from subtask_opt.arm.exact import milp_optimum

@@ -9,13 +9,15 @@ vertex order (``seed003-listed``), which reproduces Table 1 within 0.04 %
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from subtask_opt.papers.report import Row
 
 TITLE = "MAKLINK graph, Dijkstra, improved Dijkstra and PSO (polygon world)"
 
 
-def run(out: Path, *, quick: bool = False, seed: int = 0) -> tuple[list[Row], list[Path]]:
+def run(out: Path, *, quick: bool = False, seed: int = 0,
+        map_runs: Any = None) -> tuple[list[Row], list[Path]]:
     """Table 1 (PSO from 3 (quick) or 10 seeds); the four paths' figure into ``out``."""
     from subtask_opt.planners.polygon.maklink_table import (
         PAPER_PAIR,
