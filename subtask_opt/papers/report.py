@@ -114,7 +114,8 @@ class PaperReport:
             unit = f" {r.unit}" if r.unit else ""
             paper = _cell(r.paper) + (unit if isinstance(r.paper, (int, float)) else "")
             ours = _cell(r.ours) + (unit if isinstance(r.ours, (int, float)) else "")
-            out.append(f"| {r.item} | {paper} | {ours} | {r.deviation} | {r.note} |")
+            cells = (r.item, paper, ours, r.deviation, r.note)
+            out.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
         return "\n".join(out)
 
     def to_dict(self) -> dict[str, Any]:

@@ -108,3 +108,8 @@ def test_row_rejects_bad_fields(kwargs):
 def test_a_report_needs_rows():
     with pytest.raises(ParameterError, match="at least one row"):
         PaperReport("000", "t", ())
+
+
+def test_markdown_escapes_pipes_in_cells():
+    text = PaperReport("000", "t", (Row("largest |x - y|", 0, 0),)).markdown()
+    assert text.splitlines()[-1] == "| largest \\|x - y\\| | 0 | 0 | +0 |  |"
