@@ -113,3 +113,25 @@ def test_a_report_needs_rows():
 def test_markdown_escapes_pipes_in_cells():
     text = PaperReport("000", "t", (Row("largest |x - y|", 0, 0),)).markdown()
     assert text.splitlines()[-1] == "| largest \\|x - y\\| | 0 | 0 | +0 |  |"
+
+
+def test_optimal_tours_finds_every_optimum_against_brute_force():
+    """Five points: a unit square and one point above it (one optimal tour), then the fifth
+    point moved onto a corner (two tours of equal time); brute force over all 12 tours
+    is the oracle."""
+    import itertools
+
+    import numpy as np
+
+    from subtask_opt.arm.exact import milp_optimum, tour_length
+    from subtask_opt.papers.p002_sequencing import canonical, optimal_tours
+
+    tours = {canonical(np.array((0, *p))) for p in itertools.permutations(range(1, 5))}
+    for top, expected in (((0.5, 2.0), 1), ((0.0, 1.0), 2)):
+        pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], top], dtype=float)
+        m = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+        value, order = milp_optimum(m)
+        best = min(tour_length(m, np.array(t)) for t in tours)
+        brute = {t for t in tours if tour_length(m, np.array(t)) <= best * (1 + 1e-9)}
+        assert len(brute) == expected
+        assert optimal_tours(m, order, float(value)) == brute
