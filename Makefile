@@ -2,14 +2,16 @@
 #   make demo   - create .venv, install, solve the built-in 30-subtask case, write figures
 #   make test   - create .venv with the dev extras if needed, run all tests and notebooks
 # More: make lint (ruff + mypy), make coverage (kernels as Python), make fuzz (long
-# fuzzing), make bench (benchmarks, peers included), make clean (also the kernel cache).
+# fuzzing), make bench (benchmarks, peers included), make papers (reproduce the five source
+# papers: figures and tables in out/papers), make clean (also the kernel cache).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 OUT := out
 FUZZ_EXAMPLES ?= 2000
+PAPER_WORKERS ?= 2
 
-.PHONY: demo test bench lint coverage fuzz clean
+.PHONY: demo test bench papers lint coverage fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -47,6 +49,12 @@ bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/agv.py --json $(OUT)/bench/agv.json
 	$(BIN)/python benchmarks/tsplib.py --json $(OUT)/bench/tsplib.json
 	$(BIN)/python benchmarks/batch.py --json $(OUT)/bench/batch.json
+
+papers: $(VENV)/.installed
+	for p in 000 001 002 003 004; do \
+		MPLBACKEND=Agg $(BIN)/subtask-opt reproduce $$p --out $(OUT)/papers \
+			--workers $(PAPER_WORKERS) --no-progress || exit 1; \
+	done
 
 lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check subtask_opt tests benchmarks

@@ -3,6 +3,10 @@ and the 200-run random suite (odometry drift on; with and without corner
 check points) with and without the t-second collision check.
 
     .venv/bin/python benchmarks/agv.py [--n 200] [--seed 0] [--json OUT] [--out DIR]
+        [--workers N | --scheduler tcp://host:8786]
+
+The suites run here by default; ``--workers N`` / ``--scheduler`` spread their
+runs as ``subtask-opt batch`` does (same report).
 
 ``--out DIR`` also writes a GIF and a route figure of each paper scenario and
 a quadtree figure of experiment 1's map. Timings exclude JIT compilation (one
@@ -20,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from subtask_opt.batch import suite_mapper, warm_agv
+from subtask_opt.cli._common import add_workers, where_text, workers_options
 from subtask_opt.planners.agv.quadtree import compare_with_grid, decompose
 from subtask_opt.planners.agv.scenarios import (
     PAPER_SCENARIOS,
@@ -51,7 +57,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--json")
     ap.add_argument("--out")
+    add_workers(ap, what="the suite runs", serial_default=True)
     args = ap.parse_args()
+    where = workers_options(args)
 
     simulate(random_agv_scenario(10_000), seed=0)  # warm-up: JIT compile outside the timings
 
@@ -91,11 +99,12 @@ def main() -> None:
                 fig.savefig(out / "agv_quadtree.png", dpi=120, bbox_inches="tight")
                 plt.close(fig)
 
-    print(f"\n== random suite: {args.n} runs from seed {args.seed} ==")
+    print(f"\n== random suite: {args.n} runs from seed {args.seed} on {where_text(where)} ==")
     t0 = time.perf_counter()
-    on = run_agv_suite(args.n, args.seed)
+    mapper = suite_mapper(**where, progress=True, desc="agv suite", warm_up=warm_agv)
+    on = run_agv_suite(args.n, args.seed, map_runs=mapper)
     print(on.summary())
-    off = run_agv_suite(args.n, args.seed,
+    off = run_agv_suite(args.n, args.seed, map_runs=mapper,
                         params=replace(suite_params(), collision_check=False))
     print(off.summary())
     if args.out:

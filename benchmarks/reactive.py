@@ -4,12 +4,15 @@ escape) beside the continuous VFF and VFH baselines.
 
     .venv/bin/python benchmarks/reactive.py [--n 200] [--seed 0] [--noise 0.0]
                                             [--json OUT] [--out DIR] [--figure PNG]
+                                            [--workers N | --scheduler ADDRESS]
 
 ``--out DIR`` also writes, for each paper scenario and navigator, the
 trajectory figure with the sonar beams and the per-step signals and (fuzzy
 only) a GIF. ``--figure`` writes the overview of the paper scenarios (every
 navigator's trajectory, e.g. docs/figures/reactive_navigation.png). Timings
-exclude JIT compilation (one warm-up run first).
+exclude JIT compilation (one warm-up run first). The random suite runs here
+by default; ``--workers N`` / ``--scheduler`` spread it as ``subtask-opt batch``
+does (same table; the ms/run then share the cores).
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ import json
 import time
 from pathlib import Path
 
+from subtask_opt.batch import suite_mapper, warm_reactive
+from subtask_opt.cli._common import add_workers, where_text, workers_options
 from subtask_opt.planners.reactive.scenarios import PAPER_SCENARIOS, paper_scenario
 from subtask_opt.planners.reactive.simulation import (
     NAVIGATORS,
@@ -60,7 +65,9 @@ def main() -> None:
     ap.add_argument("--json", help="write all figures as JSON")
     ap.add_argument("--out", help="folder for figures and GIFs")
     ap.add_argument("--figure", help="overview PNG of the paper scenarios")
+    add_workers(ap, what="the random suite's runs", serial_default=True)
     args = ap.parse_args()
+    where = workers_options(args)
     out = Path(args.out) if args.out else None
     if out is not None or args.figure:
         import matplotlib
@@ -90,10 +97,12 @@ def main() -> None:
               f"{r['path_length']:>8.2f}{r['min_clearance']:>11.3f}{r['escape_steps']:>14}")
 
     t0 = time.perf_counter()
-    table = benchmark_navigators(args.n, args.seed, params=params, progress=True)
+    table = benchmark_navigators(args.n, args.seed, params=params, progress=True,
+                                 map_runs=suite_mapper(**where, progress=True, desc="reactive",
+                                                       warm_up=warm_reactive))
     wall = time.perf_counter() - t0
     print(f"\nrandom suite: {args.n} scenarios, seed {args.seed}, noise {args.noise}, "
-          f"{wall:.1f} s wall after warm-up")
+          f"{wall:.1f} s wall after warm-up on {where_text(where)}")
     print(f"{'navigator':<17}{'success':>9}{'coll.':>7}{'stall':>7}{'timeout':>9}{'rate':>8}"
           f"{'path ratio':>12}{'min clear':>11}{'ms/run':>9}")
     for name, row in table.items():

@@ -13,6 +13,11 @@ medians and ratios within one run.
 
     python benchmarks/sequencing.py [--seeds 100] [--robot planar_2r]
         [--time-model trapezoid] [--json out/sequencing.json]
+        [--workers N | --scheduler tcp://host:8786]
+
+Our solves run here by default (``--workers 0``: per-solve times without
+contention); ``--workers N`` / ``--scheduler`` spread them as ``subtask-opt
+batch`` does (same answers; the times then share the cores).
 """
 
 from __future__ import annotations
@@ -35,6 +40,8 @@ from subtask_opt import (
 )
 from subtask_opt.arm.exact import tour_length
 from subtask_opt.base.progress import progress_bar
+from subtask_opt.batch import map_jobs
+from subtask_opt.cli._common import add_workers, where_text, workers_options
 
 # generation at which the paper reports the optimum (its Figs. 10 and 13)
 PAPER_GENERATIONS = {"square20": 500, "random30": 800}
@@ -52,17 +59,37 @@ def instances(robot: str, time_model: str) -> list[tuple[str, str, np.ndarray]]:
     return out
 
 
-def run_ours(matrix: np.ndarray, optimum: float, preset: str, seeds: int) -> dict:
-    problem = SequencingProblem.from_matrix(matrix)
-    params = SolverParams(preset=preset)
-    hits, gens, times = 0, [], []
-    for seed in range(seeds):
-        r = solve(problem, seed=seed, params=params)
-        times.append(r.runtime_s)
-        if r.total_time <= optimum * (1 + REL_TOL):
-            hits += 1
-            gens.append(r.history.generation_of_best())
-    return {"success": hits, "runs": seeds, "generations_to_optimum": gens, "times_s": times}
+def _solve_one(job: tuple[np.ndarray, str, int]) -> tuple[float, int, float]:
+    """One solve (in a worker): total time, generation of the best tour, search time."""
+    matrix, preset, seed = job
+    r = solve(SequencingProblem.from_matrix(matrix), seed=seed,
+              params=SolverParams(preset=preset))
+    return float(r.total_time), int(r.history.generation_of_best()), float(r.runtime_s)
+
+
+def _warm() -> None:
+    """Both presets' kernels loaded once per worker, before its first timed solve."""
+    m = np.random.default_rng(0).random((8, 8)) + 1
+    for preset in ("default", "paper"):
+        _solve_one((m + m.T, preset, 0))
+
+
+def run_ours(matrices: list[np.ndarray], optima: list[float], preset: str, seeds: int,
+             where: dict) -> list[dict]:
+    """Every matrix from ``seeds`` seeds, all solves on the workers ``where`` names."""
+    jobs = [(m, preset, seed) for m in matrices for seed in range(seeds)]
+    outs = map_jobs(_solve_one, jobs, **where, warm_up=_warm, progress=True, desc=preset)
+    rows = []
+    for k, optimum in enumerate(optima):
+        hits, gens, times = 0, [], []
+        for total, best_gen, runtime in outs[k * seeds:(k + 1) * seeds]:
+            times.append(runtime)
+            if total <= optimum * (1 + REL_TOL):
+                hits += 1
+                gens.append(best_gen)
+        rows.append({"success": hits, "runs": seeds, "generations_to_optimum": gens,
+                     "times_s": times})
+    return rows
 
 
 def run_elkai(matrix: np.ndarray, optimum: float, repeats: int) -> dict | None:
@@ -155,7 +182,9 @@ def main() -> None:
     ap.add_argument("--robot", default="planar_2r")
     ap.add_argument("--time-model", default="trapezoid")
     ap.add_argument("--json", type=Path)
+    add_workers(ap, what="our solves", serial_default=True)
     args = ap.parse_args()
+    where = workers_options(args)
 
     cases = instances(args.robot, args.time_model)
     t = time.perf_counter()
@@ -170,12 +199,14 @@ def main() -> None:
         compile_s[preset] = time.perf_counter() - t
 
     rows = []
+    ours = {preset: run_ours([m for _, _, m in cases], optima, preset, args.seeds, where)
+            for preset in ("default", "paper")}
     pool = _ortools_pool()
-    with progress_bar(True, total=len(cases), desc="instances") as bar:
-        for (family, name, matrix), optimum in zip(cases, optima, strict=True):
+    with progress_bar(True, total=len(cases), desc="peers") as bar:
+        for k, ((family, name, matrix), optimum) in enumerate(zip(cases, optima, strict=True)):
             row = {"instance": name, "family": family, "n": len(matrix), "optimum": optimum}
             for preset in ("default", "paper"):
-                row[preset] = run_ours(matrix, optimum, preset, args.seeds)
+                row[preset] = ours[preset][k]
             row["elkai"] = run_elkai(matrix, optimum, args.peer_repeats)
             row["ortools"] = run_ortools(matrix, optimum, args.peer_repeats, args.ortools_limit,
                                          pool)
@@ -185,7 +216,8 @@ def main() -> None:
     if pool is not None:
         pool.shutdown()
     print(f"\nsequencing benchmark: robot {args.robot}, time model {args.time_model}, "
-          f"{args.seeds} seeds per preset; optima certified by MILP in {certify_s:.2f} s")
+          f"{args.seeds} seeds per preset on {where_text(where)}; "
+          f"optima certified by MILP in {certify_s:.2f} s")
     print("compile / cache load of the first call: "
           + ", ".join(f"{k} {v:.2f} s" for k, v in compile_s.items()))
     head = (f"{'instance':<12} {'optimum':>9} | {'default':>8} {'med ms':>7} {'gens':>5} | "

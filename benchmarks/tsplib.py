@@ -20,7 +20,10 @@ Times are wall times after JIT warm-up; the machine may be shared and busy
 (the load average is printed), so compare within one run.
 
     python benchmarks/tsplib.py [--seeds 5] [--limit 1.0] [--json out/tsplib.json]
-        [--skip-peers] [--instances eil51,berlin52]
+        [--skip-peers] [--instances eil51,berlin52] [--workers N | --scheduler ADDRESS]
+
+Our solves run here by default (``--workers 0``: times without contention);
+``--workers N`` / ``--scheduler`` spread them as ``subtask-opt batch`` does.
 """
 
 from __future__ import annotations
@@ -38,6 +41,8 @@ from subtask_opt import MaxRuntime, SequencingProblem, SolverParams, milp_optimu
 from subtask_opt.arm.bound import lower_bound
 from subtask_opt.arm.tsplib import read_tsplib
 from subtask_opt.base.stop import StoppingCriterion
+from subtask_opt.batch import map_jobs
+from subtask_opt.cli._common import add_workers, where_text, workers_options
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tsplib"
 
@@ -53,22 +58,37 @@ def _tour_length(matrix: np.ndarray, tour) -> int:
     return int(matrix[t, np.roll(t, -1)].sum())
 
 
-def run_ours(matrix: np.ndarray, optimum: int, seeds: int, limit: float | None) -> dict:
+def _solve_one(job: tuple[np.ndarray, int, int, float | None]) -> tuple[float, float, float, int]:
+    """One of our solves (in a worker): gap, wall time, build time, generations."""
+    matrix, optimum, seed, limit = job
     params = SolverParams()
-    gaps, walls, builds, gens = [], [], [], []
-    for seed in range(seeds):
-        t0 = time.perf_counter()
-        problem = SequencingProblem.from_matrix(matrix)
-        t1 = time.perf_counter()
-        stop: list[StoppingCriterion] = (params.default_stop() if limit is None
-                                         else [MaxRuntime(limit)])
-        result = solve(problem, seed=seed, params=params, stop=stop)
-        t2 = time.perf_counter()
-        gaps.append(_gap(_tour_length(matrix, result.order), optimum))
-        walls.append(t2 - t0)
-        builds.append(t1 - t0)
-        gens.append(result.generations)
-    return {"gaps": gaps, "wall_s": walls, "build_s": builds, "generations": gens}
+    t0 = time.perf_counter()
+    problem = SequencingProblem.from_matrix(matrix)
+    t1 = time.perf_counter()
+    stop: list[StoppingCriterion] = (params.default_stop() if limit is None
+                                     else [MaxRuntime(limit)])
+    result = solve(problem, seed=seed, params=params, stop=stop)
+    t2 = time.perf_counter()
+    return _gap(_tour_length(matrix, result.order), optimum), t2 - t0, t1 - t0, result.generations
+
+
+def _warm() -> None:
+    """The GA's kernels loaded once per worker, before its first timed solve."""
+    warm = np.random.default_rng(0).random((12, 12)) + 1
+    solve(SequencingProblem.from_matrix(warm + warm.T), seed=0)
+
+
+def run_ours(instances: list[tuple[np.ndarray, int]], seeds: int, limit: float | None,
+             where: dict) -> list[dict]:
+    """Every ``(matrix, optimum)`` from ``seeds`` seeds, on the workers ``where`` names."""
+    jobs = [(m, opt, seed, limit) for m, opt in instances for seed in range(seeds)]
+    outs = map_jobs(_solve_one, jobs, **where, warm_up=_warm)
+    rows = []
+    for k in range(len(instances)):
+        part = outs[k * seeds:(k + 1) * seeds]
+        rows.append({"gaps": [o[0] for o in part], "wall_s": [o[1] for o in part],
+                     "build_s": [o[2] for o in part], "generations": [o[3] for o in part]})
+    return rows
 
 
 def run_fast_tsp(matrix: np.ndarray, optimum: int, limit: float, repeats: int) -> dict | None:
@@ -175,7 +195,9 @@ def main() -> None:
     ap.add_argument("--random30", type=int, default=20,
                     help="random 30-point instances for the bound's gap (default 20)")
     ap.add_argument("--json", metavar="OUT.json", help="write every number as JSON")
+    add_workers(ap, what="our solves", serial_default=True)
     args = ap.parse_args()
+    where = workers_options(args)
 
     optima = json.loads((DATA / "optima.json").read_text())["optimum"]
     wanted = [s for s in args.instances.split(",") if s] or sorted(optima, key=lambda k: (
@@ -190,15 +212,20 @@ def main() -> None:
     lower_bound(warm)
     print(f"JIT warm-up (compile or cache load): {time.perf_counter() - t:.1f} s")
 
+    tsps = {name: read_tsplib(DATA / f"{name}.tsp") for name in wanted}
+    pairs = [(tsps[name].matrix, int(optima[name])) for name in wanted]
+    ours_default = run_ours(pairs, args.seeds, None, where)
+    ours_limit = run_ours(pairs, args.seeds, args.limit, where)
+    print(f"our solves ran on {where_text(where)}")
     pool = None if args.skip_peers else _ortools_pool()
     rows = []
-    for name in wanted:
-        inst = read_tsplib(DATA / f"{name}.tsp")
+    for k, name in enumerate(wanted):
+        inst = tsps[name]
         m = inst.matrix
         opt = int(optima[name])
         row: dict = {"name": name, "n": inst.dimension, "optimum": opt}
-        row["ours_default"] = run_ours(m, opt, args.seeds, None)
-        row["ours_limit"] = run_ours(m, opt, args.seeds, args.limit)
+        row["ours_default"] = ours_default[k]
+        row["ours_limit"] = ours_limit[k]
         if not args.skip_peers:
             row["fast_tsp"] = run_fast_tsp(m, opt, args.limit, 1)
             row["elkai"] = run_elkai(m, opt)

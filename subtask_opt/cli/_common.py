@@ -256,3 +256,45 @@ def ensure_parent(path: str | Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs",
+                serial_default: bool = False) -> None:
+    """``--scheduler ADDRESS | --workers N``: where :func:`workers_options` runs ``what``.
+
+    The same group on ``batch``, ``bench reactive``, ``bench agv`` and the
+    benchmark scripts: no option runs on local workers, one per core (a Dask
+    LocalCluster, or a process pool without dask); ``--workers 0`` runs here.
+    ``serial_default``: no option runs here (benchmarks whose per-solve times
+    would change if solves shared the cores).
+    """
+    where = parser.add_argument_group(
+        "where to run", f"{what} run on local worker processes (a Dask cluster, or a "
+                        "process pool without dask) or on an existing Dask cluster")
+    group = where.add_mutually_exclusive_group()
+    group.add_argument("--scheduler", metavar="ADDRESS",
+                       help="address of a running dask scheduler, e.g. tcp://head:8786 "
+                            "(needs pip install subtask_opt[cluster])")
+    default = "0" if serial_default else "the machine's cores"
+    group.add_argument("--workers", type=non_negative_int, metavar="N",
+                       default=0 if serial_default else None,
+                       help=f"local worker processes (default: {default}; "
+                            "0 runs in this process)")
+
+
+def workers_options(args: argparse.Namespace) -> dict[str, Any]:
+    """``{"workers": ..., "scheduler": ...}`` of :func:`add_workers` (the default resolved)."""
+    from subtask_opt.batch.pool import default_workers
+
+    if args.scheduler is not None:
+        return {"workers": None, "scheduler": args.scheduler}
+    return {"workers": default_workers() if args.workers is None else args.workers,
+            "scheduler": None}
+
+
+def where_text(options: dict[str, Any]) -> str:
+    """Where :func:`workers_options` runs, in words (``"2 local workers"``)."""
+    if options["scheduler"] is not None:
+        return str(options["scheduler"])
+    n = options["workers"]
+    return "this process" if n == 0 else f"{n} local worker{'s' * (n != 1)}"

@@ -8,10 +8,13 @@ from subtask_opt.cli._common import (
     EXIT_OK,
     add_no_progress,
     add_outputs,
+    add_workers,
     animation_output,
     failed,
     positive_int,
     seed,
+    where_text,
+    workers_options,
 )
 
 
@@ -52,6 +55,7 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
     b.add_argument("--no-collision-check", action="store_true",
                    help="switch the t-second collision check off")
     b.add_argument("--no-drift", action="store_true", help="odometry drift off")
+    add_workers(b, what="the runs")
     add_outputs(b, what="the totals", plot="a figure of the suite (outcomes, delay, drift)")
     add_no_progress(b)
     b.set_defaults(handler=_run_bench)
@@ -97,8 +101,16 @@ def _run_bench(args: argparse.Namespace) -> int:
     base = AgvParams() if args.no_drift else suite_params()
     params = base if not args.no_collision_check else AgvParams(
         collision_check=False, drift=base.drift)
-    report = run_agv_suite(args.n, args.seed, params=params, progress=not args.no_progress)
-    print(report.summary())
+    import sys
+
+    from subtask_opt.batch import suite_mapper, warm_agv
+
+    where = workers_options(args)
+    progress = not args.no_progress and sys.stderr.isatty()
+    report = run_agv_suite(args.n, args.seed, params=params, progress=progress,
+                           map_runs=suite_mapper(**where, progress=progress, desc="agv suite",
+                                                 warm_up=warm_agv))
+    print(f"{report.summary()} (on {where_text(where)})")
     if args.json:
         write_json(args.json, report.to_dict())
     if args.plot:

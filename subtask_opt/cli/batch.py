@@ -11,12 +11,14 @@ from subtask_opt.cli._common import (
     EXIT_OK,
     add_no_progress,
     add_stop_options,
+    add_workers,
     json_output,
-    non_negative_int,
     plot_output,
     refuse_overwriting_inputs,
     seed,
     stop_criteria,
+    where_text,
+    workers_options,
     write_json,
 )
 
@@ -38,13 +40,7 @@ def register(root: argparse._SubParsersAction) -> None:
                    help='subtask files (.csv with header x,y[,theta] or .json) or manifests '
                         '(.json: [{"id": ..., "case": FILE|square20|random30, "robot": ..., '
                         '"time_model": ..., "seed": ..., "case_seed": ...}, ...])')
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--scheduler", metavar="ADDRESS",
-                       help="address of a running dask scheduler, e.g. tcp://head:8786 "
-                            "(needs pip install subtask_opt[cluster])")
-    where.add_argument("--workers", type=non_negative_int, metavar="N",
-                       help="local worker processes (default: the machine's cores; "
-                            "0 solves in this process)")
+    add_workers(p, what="the jobs")
     p.add_argument("--seed", type=seed, default=None, metavar="N",
                    help="solver seed of every job (default: each manifest job's own seed, "
                         "0 for subtask files)")
@@ -59,16 +55,14 @@ def register(root: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from subtask_opt.batch import default_workers, load_jobs, solve_many
+    from subtask_opt.batch import load_jobs, solve_many
 
     refuse_overwriting_inputs(args.jobs, [args.json, args.plot])
     jobs = load_jobs(args.jobs)
-    workers = args.workers
-    if args.scheduler is None and workers is None:
-        workers = default_workers()
+    where = workers_options(args)
     started = time.perf_counter()
     results = solve_many(jobs, seeds=args.seed, stop=stop_criteria(args),
-                         client=args.scheduler, workers=workers,
+                         client=where["scheduler"], workers=where["workers"],
                          progress=not args.no_progress and sys.stderr.isatty())
     wall = time.perf_counter() - started
     failed = [r for r in results if not r.success]
@@ -78,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     summary = {
         "jobs": len(results), "succeeded": len(results) - len(failed), "failed": len(failed),
         "wall_s": wall,
-        "where": args.scheduler or ("this process" if workers == 0 else f"{workers} local workers"),
+        "where": where_text(where),
         "workers_used": slots, "jobs_time_s": sum(r.worker_time_s for r in results),
     }
     write_json(args.json, {"summary": summary, "jobs": [r.to_dict() for r in results]})

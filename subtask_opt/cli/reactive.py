@@ -15,12 +15,15 @@ from subtask_opt.cli._common import (
     EXIT_OK,
     add_no_progress,
     add_outputs,
+    add_workers,
     animation_output,
     failed,
     point,
     point3,
     positive_int,
     seed,
+    where_text,
+    workers_options,
     write_json,
 )
 
@@ -75,6 +78,7 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
     b.add_argument("--navigators", nargs="+", choices=list(navigators),
                    default=list(navigators), help=listing)
     _robot_options(b)
+    add_workers(b, what="the runs")
     add_outputs(b, what="the table", plot="a bar chart of the outcomes per navigator")
     add_no_progress(b)
     b.set_defaults(handler=_run_bench)
@@ -163,24 +167,31 @@ def _run_plan(args: argparse.Namespace) -> int:
 
 
 def _run_bench(args: argparse.Namespace) -> int:
+    import sys
     import time
 
+    from subtask_opt.batch import suite_mapper, warm_reactive
     from subtask_opt.planners.reactive.simulation import benchmark_navigators
 
     params = _params(args)
+    where = workers_options(args)
+    progress = not args.no_progress and sys.stderr.isatty()
     t0 = time.perf_counter()
     table = benchmark_navigators(args.n, args.seed, navigators=args.navigators, params=params,
-                                 progress=not args.no_progress)
+                                 progress=progress,
+                                 map_runs=suite_mapper(**where, progress=progress,
+                                                       desc="reactive", warm_up=warm_reactive))
     wall = time.perf_counter() - t0
     print(f"bench reactive: {args.n} random scenarios, seed {args.seed}, "
-          f"sonar noise {args.noise:g}")
+          f"sonar noise {args.noise:g}, on {where_text(where)}")
     print(f"{'navigator':<16}{'runs':>6}{'success':>9}{'coll.':>7}{'stall':>7}{'timeout':>9}"
           f"{'rate':>8}{'path ratio':>12}{'min clear':>11}")
     for name, row in table.items():
         print(f"{name:<16}{row['runs']:>6}{row['success']:>9}{row['collisions']:>7}"
               f"{row['stalls']:>7}{row['timeouts']:>9}{row['success_rate']:>8.1%}"
               f"{row['mean_path_ratio']:>12.3f}{row['mean_min_clearance']:>11.3f}")
-    print(f"wall time {wall:.1f} s (including JIT compilation on a first run)")
+    print(f"wall time {wall:.1f} s (including starting the workers and JIT compilation "
+          "on a first run)")
     if args.json:
         write_json(args.json, {"n": args.n, "seed": args.seed, "noise": args.noise,
                                "wall_time_s": wall, "navigators": table})

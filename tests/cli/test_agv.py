@@ -64,7 +64,7 @@ def test_plan_json_scenario_with_animation_and_drift(tmp_path, capsys):
 
 def test_bench_writes_the_totals_and_a_plot(tmp_path, capsys):
     out, fig = tmp_path / "bench.json", tmp_path / "bench.png"
-    code = main(["bench", "agv", "--n", "3", "--seed", "3", "--json", str(out),
+    code = main(["bench", "agv", "--n", "3", "--seed", "3", "--workers", "0", "--json", str(out),
                  "--plot", str(fig), "--no-progress"])
     data = json.loads(out.read_text())
     for key in ("runs", "success", "collisions", "timeouts", "mean_delay_s", "min_separation",
@@ -80,7 +80,8 @@ def test_bench_writes_the_totals_and_a_plot(tmp_path, capsys):
 def test_bench_is_reproducible(tmp_path):
     a, b = tmp_path / "a.json", tmp_path / "b.json"
     for out in (a, b):
-        main(["bench", "agv", "--n", "3", "--seed", "11", "--json", str(out), "--no-progress"])
+        main(["bench", "agv", "--n", "3", "--seed", "11", "--workers", "0", "--json", str(out),
+              "--no-progress"])
     da, db = json.loads(a.read_text()), json.loads(b.read_text())
     da.pop("seconds"), db.pop("seconds")
     assert da == db

@@ -73,7 +73,8 @@ def test_navigator_choices_come_from_the_registry():
 def test_bench_reactive_json_and_plot(tmp_path, capsys):
     out = tmp_path / "bench.json"
     png = tmp_path / "bench.png"
-    assert main(["bench", "reactive", "--n", "2", "--seed", "1", "--navigators", "fuzzy", "vfh",
+    assert main(["bench", "reactive", "--n", "2", "--seed", "1", "--workers", "0",
+                 "--navigators", "fuzzy", "vfh",
                  "--json", str(out), "--plot", str(png), "--no-progress"]) == 0
     text = capsys.readouterr().out
     assert "fuzzy" in text and "vfh" in text and "path ratio" in text

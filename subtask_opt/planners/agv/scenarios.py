@@ -29,6 +29,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -396,25 +397,43 @@ class SuiteReport:
         return text + f"; {self.seconds:.1f} s"
 
 
+def agv_suite_run(seed: int, params: AgvParams) -> tuple[AgvRun, AgvRun | None]:
+    """One run of the suite: the random scenario of ``seed`` with check points and,
+    when drift is on, again without them (same drift seed); picklable for workers."""
+    sc = random_agv_scenario(seed, params=params)
+    run = simulate(sc, seed=seed)
+    bare = (simulate(sc.with_params(check_points=False), seed=seed, free_time=run.free_time_s)
+            if params.drift else None)
+    return run, bare
+
+
 def run_agv_suite(n: int, seed: int, *, params: AgvParams | None = None,
-                  progress: bool = False) -> SuiteReport:
+                  progress: bool = False,
+                  map_runs: Callable[[Callable[[int], Any], list[int]], list[Any]] | None = None
+                  ) -> SuiteReport:
     """Run ``n`` random scenarios with seeds ``seed, seed + 1, ...`` (scenario
-    and drift seed alike); default params: :func:`suite_params` (drift on)."""
+    and drift seed alike); default params: :func:`suite_params` (drift on).
+
+    ``map_runs(fn, seeds)`` (default: a loop here, with a progress bar when
+    ``progress``) returns ``[fn(s) for s in seeds]`` in order; pass one that runs
+    them in parallel (:func:`subtask_opt.batch.suite_mapper`). Every run depends
+    on its seed only, so the report is the same wherever the runs ran.
+    """
     require_int("run_agv_suite", "n", n, 1, 100_000)
     require_int("run_agv_suite", "seed", seed, 0, 2**63 - 1 - n)
     params = suite_params() if params is None else params
     t0 = time.perf_counter()
-    runs: list[AgvRun] = []
-    bare: list[AgvRun] = []
-    with progress_bar(progress, total=n, desc="agv suite", unit="run") as bar:
-        for i in range(n):
-            sc = random_agv_scenario(seed + i, params=params)
-            run = simulate(sc, seed=seed + i)
-            runs.append(run)
-            if params.drift:
-                bare.append(simulate(sc.with_params(check_points=False), seed=seed + i,
-                                     free_time=run.free_time_s))
-            bar.update()
+    one = partial(agv_suite_run, params=params)
+    if map_runs is None:
+        pairs = []
+        with progress_bar(progress, total=n, desc="agv suite", unit="run") as bar:
+            for i in range(n):
+                pairs.append(one(seed + i))
+                bar.update()
+    else:
+        pairs = map_runs(one, list(range(seed, seed + n)))
+    runs: list[AgvRun] = [run for run, _ in pairs]
+    bare: list[AgvRun] = [b for _, b in pairs if b is not None]
     ok = [r for r in runs if r.success]
     seps = [r.min_separation for r in runs if math.isfinite(r.min_separation)]
     errs = [r.mean_drift_error for r in runs]
@@ -439,6 +458,6 @@ def run_agv_suite(n: int, seed: int, *, params: AgvParams | None = None,
 
 
 __all__ = ["MAX_JSON_DEPTH", "MAX_SCENARIO_BYTES", "PAPER_SCENARIOS", "SuiteReport",
-           "draw_image", "get_scenario", "load_scenario", "random_agv_scenario",
+           "agv_suite_run", "draw_image", "get_scenario", "load_scenario", "random_agv_scenario",
            "run_agv_suite", "scenario_1", "scenario_2_1", "scenario_2_2", "scenario_2_3",
            "suite_params"]

@@ -38,6 +38,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import Any, Protocol
 
 import numpy as np
@@ -437,22 +438,42 @@ plan_vfh = _registered("vfh")
 
 # ---------------------------------------------------------------- suites
 
+def suite_run(job: tuple[Scenario, str, int], params: ReactiveParams | None = None
+              ) -> ReactiveRun:
+    """One run of a suite: ``(scenario, navigator, noise seed)``; picklable for workers."""
+    sc, name, noise_seed = job
+    return simulate(sc.world, sc.start, sc.goal, name, params=params, seed=noise_seed)
+
+
 def run_navigation_suite(scenarios: Sequence[Scenario], navigators: Sequence[str] = NAVIGATORS,
                          *, params: ReactiveParams | None = None, seed: int = 0,
-                         progress: bool = False) -> dict[str, list[ReactiveRun]]:
-    """Every navigator on every scenario; scenario i uses noise seed ``(seed + i) mod 2**63``."""
+                         progress: bool = False,
+                         map_runs: Callable[[Callable[[Any], Any], list[Any]], list[Any]]
+                         | None = None) -> dict[str, list[ReactiveRun]]:
+    """Every navigator on every scenario; scenario i uses noise seed ``(seed + i) mod 2**63``.
+
+    ``map_runs(fn, jobs)`` (default: a loop here, with a progress bar when
+    ``progress``) returns ``[fn(j) for j in jobs]`` in order; pass one that runs
+    them in parallel (:func:`subtask_opt.batch.suite_mapper`). A run depends on
+    its scenario, navigator and seed only: the table is the same wherever it ran.
+    """
     seed = check_seed(seed) or 0
     out: dict[str, list[ReactiveRun]] = {name: [] for name in navigators}
     for name in navigators:
         if name not in NAVIGATORS:
             raise ParameterError(f"navigator must be one of {list(NAVIGATORS)}, got {name!r}")
-    with progress_bar(progress, total=len(scenarios) * len(out), desc="reactive",
-                      unit="run") as bar:
-        for i, sc in enumerate(scenarios):
-            for name in out:
-                out[name].append(simulate(sc.world, sc.start, sc.goal, name, params=params,
-                                          seed=(seed + i) % 2**63))
+    jobs = [(sc, name, (seed + i) % 2**63) for i, sc in enumerate(scenarios) for name in out]
+    one = partial(suite_run, params=params)
+    if map_runs is None:
+        runs = []
+        with progress_bar(progress, total=len(jobs), desc="reactive", unit="run") as bar:
+            for job in jobs:
+                runs.append(one(job))
                 bar.update()
+    else:
+        runs = map_runs(one, jobs)
+    for (_, name, _), run in zip(jobs, runs, strict=True):
+        out[name].append(run)
     return out
 
 
@@ -485,8 +506,9 @@ def navigation_suite_summary(runs: dict[str, list[ReactiveRun]],
 
 def benchmark_navigators(n: int, seed: int, *, navigators: Sequence[str] = NAVIGATORS,
                          params: ReactiveParams | None = None,
-                         suite: RandomSuiteParams | None = None, progress: bool = False
-                         ) -> dict[str, dict[str, Any]]:
+                         suite: RandomSuiteParams | None = None, progress: bool = False,
+                         map_runs: Callable[[Callable[[Any], Any], list[Any]], list[Any]]
+                         | None = None) -> dict[str, dict[str, Any]]:
     """``n`` seeded random scenarios, every navigator on each; the
     :func:`navigation_suite_summary` table, path ratios taken against the exact
     shortest path (visibility graph) of each world."""
@@ -495,6 +517,6 @@ def benchmark_navigators(n: int, seed: int, *, navigators: Sequence[str] = NAVIG
     seed = check_seed(seed) or 0
     scenarios = random_navigation_suite(n, seed, suite)
     runs = run_navigation_suite(scenarios, navigators, params=params, seed=seed,
-                                progress=progress)
+                                progress=progress, map_runs=map_runs)
     shortest = [shortest_path_length(sc.world, sc.start[:2], sc.goal) for sc in scenarios]
     return navigation_suite_summary(runs, shortest)
