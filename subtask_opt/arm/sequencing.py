@@ -60,6 +60,10 @@ if TYPE_CHECKING:
     from subtask_opt.arm.timing.models import TimingResult
 
 PRESETS = ("default", "paper")
+PAPER_LOOP = GAConfig(population=5, elite=1, crossover_rate=1.0, mutation_rate=0.0,
+                      restart_on_convergence=True, convergence_tol=0.01)
+"""The paper preset's micro-GA loop: the reading of the paper that
+``benchmarks/paper_micro_ga.py`` found closest to its generation counts."""
 CONFIGURATION_MODES = ("fixed", "optimize")
 DEFAULT_TIME_MODEL = "joint"
 """The time model API and CLI use by default: one the arm can execute."""
@@ -86,6 +90,11 @@ class SolverParams:
         neighbours: (default preset) candidate list length of the local search.
         bound_max_nodes: compute a Held-Karp lower bound (and stop as soon as a
             tour meets it) for problems up to this many nodes; 0 never.
+        paper_loop: (paper preset) how the loop reads the paper's micro-GA
+            (pairing, convergence test, crossover start; see
+            :class:`~subtask_opt.ga.config.GAConfig`); default :data:`PAPER_LOOP`.
+            Its population and convergence tolerance replace ``population`` and
+            ``convergence_tol``.
     """
 
     preset: str = "default"
@@ -95,8 +104,15 @@ class SolverParams:
     grasp_share: float = 0.25
     max_segment: int = 3
     neighbours: int = 8
+    paper_loop: GAConfig | None = None
 
     def __post_init__(self) -> None:
+        if self.paper_loop is not None and not isinstance(self.paper_loop, GAConfig):
+            raise ParameterError(f"SolverParams.paper_loop must be a GAConfig or None, "
+                                 f"got {self.paper_loop!r}")
+        if self.paper_loop is not None and self.preset != "paper":
+            raise ParameterError(f"SolverParams.paper_loop applies to the paper preset only, "
+                                 f"got preset {self.preset!r}")
         if self.preset not in PRESETS:
             raise ParameterError(
                 f"SolverParams.preset must be one of {', '.join(PRESETS)}, got {self.preset!r}")
@@ -445,6 +461,8 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
                       mutation_rate=0.0, restart_on_convergence=True,
                       convergence_tol=params.convergence_tol)
+    if paper:
+        config = params.paper_loop or PAPER_LOOP
     total = next((c.generations for c in criteria if isinstance(c, MaxGenerations)), None)
     with progress_bar(progress, total=total, desc="micro-GA", unit="gen") as bar:
         done = [0]
