@@ -82,6 +82,33 @@ READINGS: dict[str, GAConfig] = {
                                          crossover_start="first"),
     "random/edges/distinct": GAConfig(**_BASE, convergence="edges", convergence_tol=0.05,
                                       distinct_mates=True),
+    "random/cost/start-random": GAConfig(**_BASE, convergence_tol=0.01,
+                                         crossover_start="random"),
+    "random/edges0/start-random": GAConfig(**_BASE, convergence="edges", convergence_tol=0.0,
+                                           crossover_start="random"),
+    "random/edges/start-random/distinct": GAConfig(
+        **_BASE, convergence="edges", convergence_tol=0.05, crossover_start="random",
+        distinct_mates=True),
+    "shuffle/edges/start-random": GAConfig(**_BASE, pairing="shuffle", convergence="edges",
+                                           convergence_tol=0.05, crossover_start="random"),
+    "double/edges/start-random": GAConfig(**_BASE, pairing="double", convergence="edges",
+                                          convergence_tol=0.05, crossover_start="random"),
+    "double/edges/start-random/distinct": GAConfig(
+        **_BASE, pairing="double", convergence="edges", convergence_tol=0.05,
+        crossover_start="random", distinct_mates=True),
+    "tournament/edges/start-random": GAConfig(**_BASE, tournament=2, convergence="edges",
+                                              convergence_tol=0.05, crossover_start="random"),
+    "tournament/edges/start-random/distinct": GAConfig(
+        **_BASE, tournament=2, convergence="edges", convergence_tol=0.05,
+        crossover_start="random", distinct_mates=True),
+    "double/edges/distinct": GAConfig(**_BASE, pairing="double", convergence="edges",
+                                      convergence_tol=0.05, distinct_mates=True),
+    "double/cost/start-random/distinct": GAConfig(
+        **_BASE, pairing="double", convergence_tol=0.01, crossover_start="random",
+        distinct_mates=True),
+    "double/adjacency/start-random/distinct": GAConfig(
+        **_BASE, pairing="double", convergence="adjacency", convergence_tol=0.05,
+        crossover_start="random", distinct_mates=True),
 }
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -113,14 +114,15 @@ class OptimalTours:
 
 
 def optimal_tours(matrix: np.ndarray, *, rtol: float = 1e-9, max_tours: int = 1000,
-                  max_rounds: int = 200) -> OptimalTours:
+                  max_rounds: int = 200, exclude: Sequence[np.ndarray] = ()) -> OptimalTours:
     """All optimal closed tours of a symmetric matrix, by repeated MILP with no-good cuts.
 
     After each optimal tour T is found, the cut "at most N - 1 of T's N edges"
     excludes T (both directions: the edges are undirected) and nothing else, and
     the MILP is solved again; the enumeration ends at the first tour costlier than
     the optimum by more than ``rtol`` (relative). Raises :class:`SubtaskOptError`
-    when more than ``max_tours`` optima exist.
+    when more than ``max_tours`` optima exist. The tours in ``exclude`` are cut
+    off from the start (the optima of the other tours are returned).
     """
     require_int("optimal_tours", "max_tours", max_tours, 1)
     if not (isinstance(rtol, (int, float)) and 0.0 <= rtol < 1.0):
@@ -128,6 +130,11 @@ def optimal_tours(matrix: np.ndarray, *, rtol: float = 1e-9, max_tours: int = 10
     model = _TspModel(_square_matrix(matrix))
     model.h.setOptionValue("mip_abs_gap", 0.0)  # each re-solve must be exactly the best left
     n = model.m.shape[0]
+    for tour in exclude:
+        t = np.asarray(tour, dtype=np.int64)
+        if sorted(t.tolist()) != list(range(n)):
+            raise ParameterError(f"optimal_tours.exclude: {tour!r} is not a tour of 0..{n - 1}")
+        model.exclude(t, n)
     tours: list[np.ndarray] = []
     best = math.inf
     while True:

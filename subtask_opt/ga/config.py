@@ -12,7 +12,6 @@ from subtask_opt.base.errors import (
     require_non_negative,
 )
 
-
 # Readings of the sequencing paper's micro-GA (see GAConfig); the kernel reads the index.
 PAIRINGS = ("random", "shuffle", "rest", "double")
 CONVERGENCE_TESTS = ("cost", "edges", "adjacency")
@@ -71,8 +70,9 @@ class GAConfig:
             does), ``"random"`` (any city) or ``"first"`` (always city 0, the first
             entry of an adjacency string).
         distinct_mates: mates must also differ in content, not only in index
-            (redrawn a few times; identical strings may still mate when the
-            population holds nothing else).
+            (a second parent identical to the first is replaced by a random string
+            that differs; identical strings still mate when the population holds
+            nothing else).
     """
 
     population: int = 5

@@ -152,6 +152,24 @@ def _same_string(pop, lengths, a, b):
 
 
 @njit(cache=True)
+def _other_mate(pop, lengths, a, b, rng):
+    """A uniformly random string that differs from string ``a`` in content (``b`` when
+    every string is the same as ``a``)."""
+    n_other = 0
+    for s in range(pop.shape[0]):
+        n_other += not _same_string(pop, lengths, a, s)
+    if n_other == 0:
+        return b
+    pick = rng.integers(0, n_other)
+    for s in range(pop.shape[0]):
+        if not _same_string(pop, lengths, a, s):
+            if pick == 0:
+                return s
+            pick -= 1
+    return b
+
+
+@njit(cache=True)
 def _shuffled(indices, rng):
     """``indices`` in a random order (Fisher-Yates, in place) and returned."""
     for i in range(indices.shape[0] - 1, 0, -1):
@@ -184,11 +202,8 @@ def _draw_mates(pairing, costs, order, n_elite, n_children, tournament, distinct
         return
     for c in range(n_children):
         a, b = _pick_pair(costs, tournament, rng)
-        if distinct:
-            for _ in range(8):
-                if not _same_string(pop, lengths, a, b):
-                    break
-                a, b = _pick_pair(costs, tournament, rng)
+        if distinct and _same_string(pop, lengths, a, b):
+            b = _other_mate(pop, lengths, a, b, rng)
         mates[c, 0] = a
         mates[c, 1] = b
     return
@@ -307,11 +322,8 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
         for c in range(n_kids):
             if pairing == _PAIR_RANDOM:
                 a, b = _pick_pair(costs, tournament, rng)
-                if distinct:
-                    for _ in range(8):
-                        if not _same_string(pop, lengths, a, b):
-                            break
-                        a, b = _pick_pair(costs, tournament, rng)
+                if distinct and _same_string(pop, lengths, a, b):
+                    b = _other_mate(pop, lengths, a, b, rng)
             else:
                 a, b = mates[c, 0], mates[c, 1]
             child = new_pop[n_elite + c] if pairing != _PAIR_DOUBLE else kids[c]
