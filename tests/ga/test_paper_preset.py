@@ -315,3 +315,32 @@ def test_optimal_tours_validates_and_caps():
         optimal_tours(m, max_tours=3)
     with pytest.raises(ParameterError, match="exclude"):
         optimal_tours(m, exclude=[np.arange(19)])
+
+
+def test_optimal_tours_figure_has_a_labelled_panel_per_tour(tmp_path, square20_paper_matrix):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from subtask_opt import builtin_case, load_arm
+    from subtask_opt.plotting.sequencing import optimal_tours_figure, save_optimal_tours_figure
+
+    arm = load_arm("planar_2r")
+    problem = SequencingProblem(builtin_case("square20", arm), arm, time_model="paper")
+    found = optimal_tours(problem.matrix)
+    panels = [(problem, found.tours[0], "optimum"), (problem, np.arange(20), "input order")]
+    fig = optimal_tours_figure(panels, title="square20 optima")
+    axes = fig.get_axes()
+    assert [ax.get_title() for ax in axes] == ["optimum", "input order"]
+    for ax in axes:
+        assert ax.get_xlabel() == "x [m]" and ax.get_ylabel() == "y [m]"
+        assert ax.get_legend() is None  # one legend for the figure
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert len(labels) == len(set(labels)) and "subtask" in labels
+    assert fig._suptitle.get_text() == "square20 optima"
+    plt.close(fig)
+    out = save_optimal_tours_figure(panels, tmp_path / "o.png", title="t")
+    assert out.stat().st_size > 10_000
+    with pytest.raises(ValueError, match="at least one panel"):
+        optimal_tours_figure([], title="none")
