@@ -171,6 +171,20 @@ def test_paper_preset_runs_the_paper_loop_and_only_it():
         SolverParams(preset="paper", paper_loop={"pairing": "rest"})
 
 
+def test_the_paper_preset_runs_paper_loop_with_its_population():
+    problem = SequencingProblem.from_matrix(_random_matrix(6, 12))
+    stop = MaxGenerations(40)
+    implicit = solve(problem, seed=2, params=SolverParams(preset="paper"), stop=stop)
+    explicit = solve(problem, seed=2, params=SolverParams(preset="paper", paper_loop=PAPER_LOOP),
+                     stop=stop)
+    np.testing.assert_array_equal(implicit.history.mean_cost, explicit.history.mean_cost)
+    seven = solve(problem, seed=2, params=SolverParams(preset="paper", population=7), stop=stop)
+    same_seven = solve(problem, seed=2, stop=stop, params=SolverParams(
+        preset="paper", paper_loop=GAConfig(**{**PAPER_LOOP.__dict__, "population": 7})))
+    np.testing.assert_array_equal(seven.history.mean_cost, same_seven.history.mean_cost)
+    assert not np.array_equal(seven.history.mean_cost, implicit.history.mean_cost)
+
+
 def test_paper_loop_option_changes_the_search_and_is_reproducible():
     problem = SequencingProblem.from_matrix(_random_matrix(5, 14))
     stop = MaxGenerations(60)
