@@ -8,7 +8,10 @@ resolved by :mod:`subtask_opt.ga.dispatch` (signatures there).
 
 The loop is generational with elitism; it restarts the population (best +
 fresh individuals) when it has converged, if configured to, which is the
-micro-GA of Krishnakumar that the sequencing paper uses. Python drives the
+micro-GA of Krishnakumar that the sequencing paper uses; how parents are paired,
+what "converged" means and where a permutation child starts are options
+(:class:`~subtask_opt.ga.config.GAConfig`), the readings of that paper's
+open choices (``benchmarks/paper_micro_ga.py``). Python drives the
 kernel in chunks of generations (:func:`run_in_chunks`) and asks the stopping
 criteria between chunks, because numba cannot call Python objects.
 """
@@ -32,7 +35,13 @@ from subtask_opt.base.stop import (
     kernel_limits,
 )
 from subtask_opt.ga import dispatch as ops
-from subtask_opt.ga.config import GAConfig, LoopParams
+from subtask_opt.ga.config import (
+    CONVERGENCE_TESTS,
+    CROSSOVER_STARTS,
+    PAIRINGS,
+    GAConfig,
+    LoopParams,
+)
 from subtask_opt.ga.kinds import Kind, tag
 
 # Layout of the int64 ``counters`` array (the loop's state between chunks).
@@ -135,10 +144,13 @@ def _stable_argsort(costs):
 
 
 # --- readings of the sequencing paper's micro-GA (GAConfig.pairing, .convergence,
-# .crossover_start, .distinct_mates); indices into the tuples of ga/config.py
-_PAIR_RANDOM, _PAIR_SHUFFLE, _PAIR_REST, _PAIR_DOUBLE = range(4)
-_CONV_COST, _CONV_EDGES, _CONV_ADJACENCY = range(3)
-_START_PARENT, _START_RANDOM, _START_FIRST = range(3)
+# .crossover_start, .distinct_mates): LoopParams carries the index of the choice
+_PAIR_RANDOM, _PAIR_SHUFFLE = PAIRINGS.index("random"), PAIRINGS.index("shuffle")
+_PAIR_REST, _PAIR_DOUBLE = PAIRINGS.index("rest"), PAIRINGS.index("double")
+_CONV_COST = CONVERGENCE_TESTS.index("cost")
+_CONV_ADJACENCY = CONVERGENCE_TESTS.index("adjacency")
+_START_PARENT = CROSSOVER_STARTS.index("parent")
+_START_FIRST = CROSSOVER_STARTS.index("first")
 
 
 @njit(cache=True, inline="always")
