@@ -110,12 +110,14 @@ class GAConfig:
             raise ParameterError(
                 f"{owner}.tournament must be 0 or in [2, population], got {self.tournament!r}")
         require_int(owner, "mutation_horizon", self.mutation_horizon, 1, 2**62)
+        # the paper readings; a planner class that embeds the GA fields may lack them
         for name, choices in (("pairing", PAIRINGS), ("convergence", CONVERGENCE_TESTS),
                               ("crossover_start", CROSSOVER_STARTS)):
-            if getattr(self, name) not in choices:
+            value = getattr(self, name, choices[0])
+            if value not in choices:
                 raise ParameterError(f"{owner}.{name} must be one of {', '.join(choices)}, "
-                                     f"got {getattr(self, name)!r}")
-        if not isinstance(self.distinct_mates, bool):
+                                     f"got {value!r}")
+        if not isinstance(getattr(self, "distinct_mates", False), bool):
             raise ParameterError(f"{owner}.distinct_mates must be True or False, "
                                  f"got {self.distinct_mates!r}")
 
