@@ -15,7 +15,7 @@ default, a micro-GA whose children are polished by local search.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -60,6 +60,14 @@ if TYPE_CHECKING:
     from subtask_opt.arm.timing.models import TimingResult
 
 PRESETS = ("default", "paper")
+PAPER_LOOP = GAConfig(population=5, elite=1, crossover_rate=1.0, mutation_rate=0.0,
+                      restart_on_convergence=True, pairing="double", convergence="cost",
+                      convergence_tol=0.01, crossover_start="random", distinct_mates=True)
+"""The paper preset's micro-GA loop: the reading of the paper (seed 002, III-2) that
+``benchmarks/paper_micro_ga.py`` found closest to its generation counts: the best
+string kept; "8 pairs" of strings that differ mated, the better 4 children kept;
+greedy crossover from a random city; restart (best + 4 random strings) when the
+costs are within 1% or stopped changing; no mutation."""
 CONFIGURATION_MODES = ("fixed", "optimize")
 DEFAULT_TIME_MODEL = "joint"
 """The time model API and CLI use by default: one the arm can execute."""
@@ -70,22 +78,29 @@ class SolverParams:
     """How :func:`solve` searches.
 
     Attributes:
-        preset: ``"paper"`` is the paper's micro-GA exactly (population 5,
-            elitism, random pairing, greedy crossover with a random fallback,
-            random restarts on convergence, no mutation, no local search).
-            ``"default"`` keeps that loop and adds what makes it fast and
+        preset: ``"paper"`` is the paper's micro-GA (population 5, elitism,
+            greedy crossover with a random fallback, random restarts on
+            convergence, no mutation, no local search), with the pairing and
+            convergence test of :data:`PAPER_LOOP` (the paper leaves them open).
+            ``"default"`` keeps a random-pairing loop and adds what makes it fast and
             reliable: nearest-city fallback in the crossover, a 2-opt/Or-opt
             local search around every change, and restarts that mix kicks of
             the best tour with randomised nearest-neighbour tours.
         population: micro-GA population size (the paper: 5).
-        convergence_tol: relative cost spread below which the population
-            counts as converged and restarts.
+        convergence_tol: (default preset) relative cost spread below which the
+            population counts as converged and restarts (the paper preset's test
+            is ``paper_loop``'s).
         grasp_share: (default preset) share of restart individuals built by
             randomised nearest neighbour instead of kicking the best tour.
         max_segment: (default preset) longest run of subtasks Or-opt moves.
         neighbours: (default preset) candidate list length of the local search.
         bound_max_nodes: compute a Held-Karp lower bound (and stop as soon as a
             tour meets it) for problems up to this many nodes; 0 never.
+        paper_loop: (paper preset) how the loop reads the paper's micro-GA
+            (pairing, convergence test, crossover start; see
+            :class:`~subtask_opt.ga.config.GAConfig`); None: :data:`PAPER_LOOP`
+            with ``population``. A given loop is used as it is (its population and
+            convergence test replace ``population`` and ``convergence_tol``).
     """
 
     preset: str = "default"
@@ -95,8 +110,15 @@ class SolverParams:
     grasp_share: float = 0.25
     max_segment: int = 3
     neighbours: int = 8
+    paper_loop: GAConfig | None = None
 
     def __post_init__(self) -> None:
+        if self.paper_loop is not None and not isinstance(self.paper_loop, GAConfig):
+            raise ParameterError(f"SolverParams.paper_loop must be a GAConfig or None, "
+                                 f"got {self.paper_loop!r}")
+        if self.paper_loop is not None and self.preset != "paper":
+            raise ParameterError(f"SolverParams.paper_loop applies to the paper preset only, "
+                                 f"got preset {self.preset!r}")
         if self.preset not in PRESETS:
             raise ParameterError(
                 f"SolverParams.preset must be one of {', '.join(PRESETS)}, got {self.preset!r}")
@@ -445,6 +467,8 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
                       mutation_rate=0.0, restart_on_convergence=True,
                       convergence_tol=params.convergence_tol)
+    if paper:
+        config = params.paper_loop or replace(PAPER_LOOP, population=params.population)
     total = next((c.generations for c in criteria if isinstance(c, MaxGenerations)), None)
     with progress_bar(progress, total=total, desc="micro-GA", unit="gen") as bar:
         done = [0]

@@ -8,7 +8,10 @@ resolved by :mod:`subtask_opt.ga.dispatch` (signatures there).
 
 The loop is generational with elitism; it restarts the population (best +
 fresh individuals) when it has converged, if configured to, which is the
-micro-GA of Krishnakumar that the sequencing paper uses. Python drives the
+micro-GA of Krishnakumar that the sequencing paper uses; how parents are paired,
+what "converged" means and where a permutation child starts are options
+(:class:`~subtask_opt.ga.config.GAConfig`), the readings of that paper's
+open choices (``benchmarks/paper_micro_ga.py``). Python drives the
 kernel in chunks of generations (:func:`run_in_chunks`) and asks the stopping
 criteria between chunks, because numba cannot call Python objects.
 """
@@ -32,7 +35,13 @@ from subtask_opt.base.stop import (
     kernel_limits,
 )
 from subtask_opt.ga import dispatch as ops
-from subtask_opt.ga.config import GAConfig, LoopParams
+from subtask_opt.ga.config import (
+    CONVERGENCE_TESTS,
+    CROSSOVER_STARTS,
+    PAIRINGS,
+    GAConfig,
+    LoopParams,
+)
 from subtask_opt.ga.kinds import Kind, tag
 
 # Layout of the int64 ``counters`` array (the loop's state between chunks).
@@ -134,6 +143,123 @@ def _stable_argsort(costs):
     return order
 
 
+# --- readings of the sequencing paper's micro-GA (GAConfig.pairing, .convergence,
+# .crossover_start, .distinct_mates): LoopParams carries the index of the choice
+_PAIR_RANDOM, _PAIR_SHUFFLE = PAIRINGS.index("random"), PAIRINGS.index("shuffle")
+_PAIR_REST, _PAIR_DOUBLE = PAIRINGS.index("rest"), PAIRINGS.index("double")
+_CONV_COST = CONVERGENCE_TESTS.index("cost")
+_CONV_ADJACENCY = CONVERGENCE_TESTS.index("adjacency")
+_START_PARENT = CROSSOVER_STARTS.index("parent")
+_START_FIRST = CROSSOVER_STARTS.index("first")
+
+
+@njit(cache=True, inline="always")
+def _same_string(pop, lengths, a, b):
+    if lengths[a] != lengths[b]:
+        return False
+    for i in range(lengths[a]):
+        if pop[a, i] != pop[b, i]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _other_mate(pop, lengths, a, b, rng):
+    """A uniformly random string that differs from string ``a`` in content (``b`` when
+    every string is the same as ``a``)."""
+    n_other = 0
+    for s in range(pop.shape[0]):
+        n_other += not _same_string(pop, lengths, a, s)
+    if n_other == 0:
+        return b
+    pick = rng.integers(0, n_other)
+    for s in range(pop.shape[0]):
+        if not _same_string(pop, lengths, a, s):
+            if pick == 0:
+                return s
+            pick -= 1
+    return b
+
+
+@njit(cache=True)
+def _shuffled(indices, rng):
+    """``indices`` in a random order (Fisher-Yates, in place) and returned."""
+    for i in range(indices.shape[0] - 1, 0, -1):
+        j = rng.integers(0, i + 1)
+        indices[i], indices[j] = indices[j], indices[i]
+    return indices
+
+
+@njit(cache=True)
+def _draw_mates(pairing, costs, order, n_elite, n_children, tournament, distinct, pop,
+                lengths, rng, mates):
+    """Parent indices of every child, ``mates[c] = (a, b)`` with ``a != b``, for the
+    shuffle-based and doubled pairings (the plain random pairing draws per child)."""
+    if pairing == _PAIR_SHUFFLE or pairing == _PAIR_REST:
+        pool = order.copy() if pairing == _PAIR_SHUFFLE else order[n_elite:].copy()
+        m = pool.shape[0]
+        for c in range(n_children):
+            if c % m == 0:  # a fresh random arrangement for every round of the pool
+                _shuffled(pool, rng)
+            a = pool[c % m]
+            b = pool[(c + 1) % m] if m > 1 else order[0]
+            if distinct and m > 2 and _same_string(pop, lengths, a, b):
+                for k in range(2, m):  # the next string of the arrangement that differs
+                    other = pool[(c + k) % m]
+                    if not _same_string(pop, lengths, a, other):
+                        b = other
+                        break
+            mates[c, 0] = a
+            mates[c, 1] = b
+        return
+    for c in range(n_children):
+        a, b = _pick_pair(costs, tournament, rng)
+        if distinct and _same_string(pop, lengths, a, b):
+            b = _other_mate(pop, lengths, a, b, rng)
+        mates[c, 0] = a
+        mates[c, 1] = b
+    return
+
+
+@njit(cache=True)
+def _rotate_to(genes, length, city, out):
+    """The closed tour ``genes[:length]`` written into ``out`` starting at ``city``."""
+    start = 0
+    for i in range(length):
+        if genes[i] == city:
+            start = i
+            break
+    for i in range(length):
+        out[i] = genes[(start + i) % length]
+
+
+@njit(cache=True)
+def _edges_converged(pop, lengths, costs, tol, directed):
+    """At most ``tol`` of the other strings' edges are not in the best string
+    (closed tours over 0..n-1); ``directed`` compares successor entries, the
+    adjacency strings of the sequencing paper, so a reversed tour differs."""
+    n_pop = pop.shape[0]
+    i_best = np.argmin(costs)
+    n = lengths[i_best]
+    succ_best = np.empty(n, dtype=np.int64)
+    pred_best = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        succ_best[pop[i_best, i]] = pop[i_best, (i + 1) % n]
+        pred_best[pop[i_best, (i + 1) % n]] = pop[i_best, i]
+    differ = 0
+    for s in range(n_pop):
+        if s == i_best:
+            continue
+        for i in range(n):
+            u = pop[s, i]
+            v = pop[s, (i + 1) % n]
+            if directed:
+                differ += succ_best[u] != v
+            else:
+                differ += succ_best[u] != v and pred_best[u] != v
+    return differ <= tol * (n_pop - 1) * n
+
+
 @njit(cache=True)
 def _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng):
     """Best so far in slot 0 (once there is one) and fresh, improved individuals elsewhere."""
@@ -173,6 +299,17 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
     new_pop = np.empty((n_pop, max_genes), dtype=pop.dtype)
     new_lengths = np.empty(n_pop, dtype=lengths.dtype)
     new_costs = np.empty(n_pop)
+    pairing = params.pairing
+    convergence = params.convergence
+    start_rule = params.crossover_start
+    distinct = params.distinct_mates
+    n_kids = (n_pop - n_elite) * (2 if pairing == _PAIR_DOUBLE else 1)
+    mates = np.empty((n_kids, 2), dtype=np.int64)
+    kids = np.empty((n_kids if pairing == _PAIR_DOUBLE else 0, max_genes), dtype=pop.dtype)
+    kid_lengths = np.empty(n_kids, dtype=lengths.dtype)
+    kid_costs = np.empty(n_kids)
+    rot_a = np.empty(max_genes, dtype=pop.dtype)
+    rot_b = np.empty(max_genes, dtype=pop.dtype)
     if counters[_BEST_LEN] == 0:  # first call: build the initial population
         _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng)
         i_best = np.argmin(costs)
@@ -191,21 +328,56 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
             new_lengths[e] = lengths[src]
             new_costs[e] = costs[src]
         strength = min(counters[_GEN] / horizon, 1.0)
-        for c in range(n_elite, n_pop):
-            a, b = _pick_pair(costs, tournament, rng)
-            child = new_pop[c]
+        if pairing != _PAIR_RANDOM:
+            _draw_mates(pairing, costs, order, n_elite, n_kids, tournament, distinct, pop,
+                        lengths, rng, mates)
+        for c in range(n_kids):
+            if pairing == _PAIR_RANDOM:
+                a, b = _pick_pair(costs, tournament, rng)
+                if distinct and _same_string(pop, lengths, a, b):
+                    b = _other_mate(pop, lengths, a, b, rng)
+            else:
+                a, b = mates[c, 0], mates[c, 1]
+            child = new_pop[n_elite + c] if pairing != _PAIR_DOUBLE else kids[c]
+            parent_a = pop[a]
+            parent_b = pop[b]
+            if start_rule != _START_PARENT:  # closed tours: rotate both to one start city
+                city = 0 if start_rule == _START_FIRST else rng.integers(0, lengths[a])
+                _rotate_to(pop[a], lengths[a], city, rot_a)
+                _rotate_to(pop[b], lengths[b], city, rot_b)
+                parent_a = rot_a
+                parent_b = rot_b
             if p_cross >= 1.0 or rng.random() < p_cross:
-                length = ops.crossover(kind, pop[a], lengths[a], pop[b], lengths[b], data, aux,
-                                       rng, child)
+                length = ops.crossover(kind, parent_a, lengths[a], parent_b, lengths[b], data,
+                                       aux, rng, child)
             else:
                 child[: lengths[a]] = pop[a, : lengths[a]]
                 length = lengths[a]
             if p_mut > 0.0 and rng.random() < p_mut:
                 length = ops.mutate(kind, child, length, data, aux, rng, strength)
             length = ops.improve(kind, child, length, data, aux)
-            new_lengths[c] = length
-            new_costs[c] = ops.evaluate(kind, child, length, data, aux)
-        converged = restart and _population_converged(new_costs, costs, conv_tol)
+            if pairing == _PAIR_DOUBLE:
+                kid_lengths[c] = length
+                kid_costs[c] = ops.evaluate(kind, child, length, data, aux)
+            else:
+                new_lengths[n_elite + c] = length
+                new_costs[n_elite + c] = ops.evaluate(kind, child, length, data, aux)
+        if pairing == _PAIR_DOUBLE:  # the better half of the children survives
+            kept = _stable_argsort(kid_costs)
+            for c in range(n_pop - n_elite):
+                k = kept[c]
+                new_pop[n_elite + c, : kid_lengths[k]] = kids[k, : kid_lengths[k]]
+                new_lengths[n_elite + c] = kid_lengths[k]
+                new_costs[n_elite + c] = kid_costs[k]
+        if not restart:
+            converged = False
+        elif convergence != _CONV_COST:
+            # a population that stopped changing has converged too (see the cost test)
+            converged = _edges_converged(new_pop, new_lengths, new_costs, conv_tol,
+                                         convergence == _CONV_ADJACENCY) or _same_multiset(
+                                             new_costs, costs)
+        else:
+            converged = _population_converged(new_costs, costs, conv_tol)
         pop[:, :] = new_pop
         lengths[:] = new_lengths
         costs[:] = new_costs

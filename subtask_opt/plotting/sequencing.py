@@ -11,7 +11,9 @@
 * :func:`plot_convergence` - the best and the mean tour time as their excess over
   the final best, on a log scale, with the restarts marked;
 * :func:`solution_figure` / :func:`save_solution_figure` - tour + convergence
-  (+ order table), titled with robot, model, N and the total time.
+  (+ order table), titled with robot, model, N and the total time;
+* :func:`optimal_tours_figure` / :func:`save_optimal_tours_figure` - several
+  tours of one instance side by side (e.g. its optimal tours).
 
 Everything is computed from public fields: ``result.order``, ``result.report``,
 ``result.history``, ``problem.subtasks``, ``problem.timing`` and the arm's IK/FK.
@@ -19,6 +21,7 @@ Everything is computed from public fields: ``result.order``, ``result.report``,
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -411,6 +414,46 @@ def save_solution_figure(result: Result, problem: SequencingProblem, path: str |
     return path
 
 
-__all__ = ["MAX_ARM_POSES", "MAX_LABELLED_LEGS", "plot_convergence", "plot_order_table",
-           "plot_tour", "plot_workspace", "reachable_raster", "save_solution_figure",
-           "solution_figure", "tour_legs"]
+def optimal_tours_figure(panels: Sequence[tuple[SequencingProblem, Any, str]], *,
+                         title: str) -> Figure:
+    """Tours side by side, one panel each: ``(problem, order, panel title)``.
+
+    Made for several optimal tours of one instance (the sequencing paper's Figs. 8
+    and 9); each panel is :func:`plot_tour` without arm poses or inset, legs numbered.
+    """
+    import matplotlib.pyplot as plt
+
+    if not panels:
+        raise ValueError("optimal_tours_figure needs at least one panel")
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.6 * len(panels), 5.8), squeeze=False)
+    entries: dict[str, Any] = {}  # one legend for all panels, each entry once
+    for ax, (problem, order, panel_title) in zip(axes[0], panels, strict=True):
+        plot_tour(problem, order, ax=ax, title=panel_title, draw_arm=False, inset=False)
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(label, handle)
+        legend = ax.get_legend()
+        if legend is not None:
+            legend.remove()
+    fig.suptitle(title, fontsize=12)
+    fig.tight_layout(rect=(0.0, 0.07, 1.0, 1.0))
+    fig.legend(list(entries.values()), list(entries), loc="lower center", ncol=len(entries),
+               fontsize=9, frameon=False)
+    return fig
+
+
+def save_optimal_tours_figure(panels: Sequence[tuple[SequencingProblem, Any, str]],
+                              path: str | Path, *, title: str) -> Path:
+    """Write :func:`optimal_tours_figure` to ``path`` (PNG, PDF, SVG by extension)."""
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig = optimal_tours_figure(panels, title=title)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+__all__ = ["MAX_ARM_POSES", "MAX_LABELLED_LEGS", "optimal_tours_figure", "plot_convergence",
+           "plot_order_table", "plot_tour", "plot_workspace", "reachable_raster",
+           "save_optimal_tours_figure", "save_solution_figure", "solution_figure", "tour_legs"]
