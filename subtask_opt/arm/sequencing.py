@@ -22,8 +22,8 @@ import numpy as np
 
 from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
-from subtask_opt.arm.bound import lower_bound
 from subtask_opt.arm._configuration_kernels import ConfiguredData
+from subtask_opt.arm.bound import lower_bound
 from subtask_opt.arm.configurations import penalty_for
 from subtask_opt.arm.report import TourReport, tour_report
 from subtask_opt.base.errors import (
