@@ -410,6 +410,51 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
 
 
 
+def evaluate_tour(problem: SerialProblem, order: Any, choice: Any, *, seed: int = 0,
+                  cpu: dict[str, float] | None = None) -> SerialResult:
+    """The :class:`SerialResult` of a given tour (another method's answer, say).
+
+    Args:
+        order: (N,) permutation of the targets (home before the first, after the last).
+        choice: (N,) per target (input order), the index of its configuration.
+    """
+    n = problem.size
+    o = np.asarray(order, dtype=np.int64)
+    c = np.asarray(choice, dtype=np.int64)
+    if o.shape != (n,) or not np.array_equal(np.sort(o), np.arange(n)):
+        raise ParameterError(f"order must be a permutation of 0..{n - 1}, got {order!r}")
+    if c.shape != (n,) or np.any(c < 0) or np.any(c >= problem.counts):
+        raise ParameterError(f"choice must hold one configuration index per target, got "
+                             f"{choice!r}")
+    chosen = np.array([problem.configurations[i][c[i]] for i in range(n)])
+    path = np.vstack([problem.home, chosen[o], problem.home])
+    planned = np.array([trapezoid_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
+                        for k in range(n + 1)])
+    lim = problem.arm.limits
+    executed = np.array([ruckig_leg_time(path[k], path[k + 1], lim.velocity,
+                                         problem.limits.acceleration, lim.jerk)
+                         for k in range(n + 1)])
+    colliding = 0
+    if problem.checker is not None:
+        colliding = sum(problem.checker.leg_in_collision(path[k], path[k + 1], problem.clearance)
+                        for k in range(n + 1))
+    counts = {
+        "targets": n,
+        "configurations_per_target": [int(k) for k in problem.counts],
+        "configurations": int(problem.offsets[-1]),
+        "dropped_in_collision": problem.dropped_in_collision,
+        "legs_checked": n + 1 if problem.checker is not None else 0,
+        "legs_infeasible": int(colliding),
+        "legs_detoured": 0,
+        "search_rounds": 0,
+    }
+    return SerialResult(order=o, configuration_index=c, configurations=chosen,
+                        home=np.array(problem.home), leg_times=executed,
+                        planned_leg_times=planned, total_time=float(executed.sum()),
+                        collision_checked=problem.checker is not None, counts=counts,
+                        cpu=dict(cpu or {}), generations=0, restarts=0, seed=int(seed))
+
+
 def default_home(arm: SerialArm) -> np.ndarray | None:
     """The home (radians) the robot's JSON file beside its URDF gives as ``home_deg``, or None."""
     import json
@@ -468,4 +513,5 @@ def serial_problem_from_files(robot: str, case: str | Path, *, scene: str | Path
 
 
 __all__ = ["MAX_CONFIGURATIONS", "SerialProblem", "SerialResult", "default_home",
+           "evaluate_tour",
            "serial_problem_from_files", "solve_serial"]
