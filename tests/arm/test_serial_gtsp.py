@@ -128,27 +128,43 @@ def test_pack_layers_rejects_bad_offsets() -> None:
 # ---------------------------------------------------------------- leg times
 
 
-def _one_joint_time(d: float, v: float, a: float) -> float:
-    """Rest-to-rest bang-coast-bang time of one joint, integrated numerically (an oracle)."""
-    # accelerate to the peak speed min(v, sqrt(d a)), coast, brake: distance per phase
-    peak = min(v, math.sqrt(d * a))
-    t_acc = peak / a
-    coast = (d - peak * t_acc) / peak if peak > 0 else 0.0
-    return 2 * t_acc + coast
+def _straight_line_time(dq: np.ndarray, v: np.ndarray, a: np.ndarray) -> float:
+    """Fastest rest-to-rest straight joint line, by bisection on the duration (an oracle).
+
+    A duration T is feasible when the symmetric trapezoid of the path parameter
+    with the smallest peak speed that covers it in T keeps every joint within its limits.
+    """
+    d = np.abs(dq)
+    if not d.any():
+        return 0.0
+
+    def feasible(t: float) -> bool:
+        # path parameter 0 -> 1 in time t with acceleration phase tau: peak speed s1 and
+        # acceleration s1 / tau, where 1 = s1 (t - tau); pick the largest feasible tau
+        for tau in np.linspace(1e-9, t / 2, 4001):
+            s1 = 1.0 / (t - tau)
+            if np.all(s1 * d <= v * (1 + 1e-12)) and np.all(s1 / tau * d <= a * (1 + 1e-12)):
+                return True
+        return False
+
+    lo, hi = 0.0, 100.0
+    for _ in range(50):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if feasible(mid) else (mid, hi)
+    return hi
 
 
-def test_trapezoid_matrix_matches_per_joint_formula() -> None:
+def test_trapezoid_matrix_matches_a_bisection_oracle() -> None:
     rng = np.random.default_rng(0)
     lim = joint_limits([1.0, 0.7, 1.57], [5.0, 4.25, 8.0])
-    qa = rng.uniform(-3, 3, size=(4, 3))
-    qb = rng.uniform(-3, 3, size=(5, 3))
+    qa = rng.uniform(-3, 3, size=(2, 3))
+    qb = np.vstack([rng.uniform(-3, 3, size=(2, 3)), qa[0] + [0.01, -0.02, 0.005]])
     m = trapezoid_leg_times(qa, qb, lim)
-    assert m.shape == (4, 5)
-    for r in range(4):
-        for c in range(5):
-            expect = max(_one_joint_time(abs(qb[c, j] - qa[r, j]), lim.velocity[j],
-                                         lim.acceleration[j]) for j in range(3))
-            assert m[r, c] == pytest.approx(expect, rel=1e-12)
+    assert m.shape == (2, 3)
+    for r in range(2):
+        for c in range(3):
+            oracle = _straight_line_time(qb[c] - qa[r], lim.velocity, lim.acceleration)
+            assert m[r, c] == pytest.approx(oracle, rel=2e-3)
 
 
 def test_trapezoid_equals_ruckig_without_jerk_and_is_below_it_with_jerk() -> None:

@@ -2,17 +2,19 @@
 
 Two models of the same move q_a -> q_b (every joint starts and ends at rest):
 
-* :func:`trapezoid_leg_times` - the synchronised per-joint trapezoid, closed
-  form: joint j alone needs ``T_j = 2 sqrt(d_j / a_j)`` when its distance
-  ``d_j <= v_j^2 / a_j`` (it never reaches full speed) and
-  ``T_j = d_j / v_j + v_j / a_j`` otherwise; the synchronised move takes
-  ``T = max_j T_j`` (the other joints are slowed down to finish with the
-  slowest). Vectorised: an (a, n) by (b, n) pair of configuration sets gives
+* :func:`trapezoid_leg_times` - the synchronised trapezoid, closed form: every
+  joint follows the same time profile s(t) from 0 to 1 scaled by its distance
+  ``d_j`` (phase synchronisation: the move is a straight line in joint space,
+  which is what the leg collision sweep checks), so s may move at most
+  ``V = min_j v_j / d_j`` and accelerate at most ``A = min_j a_j / d_j``; the
+  time is ``2 / sqrt(A)`` when full speed is never reached (``V^2 / A >= 1``)
+  and ``1 / V + V / A`` otherwise. Vectorised: an (a, n) by (b, n) pair of configuration sets gives
   the (a, b) matrix of leg times in one numba kernel. This is the time model
   the sequencer searches with.
-* :func:`ruckig_leg_time` - ruckig's time-optimal synchronised profile with
-  the arm's jerk limits (the executed time); without jerk limits it equals the
-  trapezoid time (to round-off), with them it is longer.
+* :func:`ruckig_leg_time` - ruckig's time-optimal profile of the same
+  straight joint line with the arm's jerk limits (the executed time,
+  :class:`StraightLeg`); without jerk limits it equals the trapezoid time (to
+  round-off), with them it is longer.
 """
 
 from __future__ import annotations
@@ -49,26 +51,28 @@ def joint_limits(velocity: Any, acceleration: Any) -> JointLimits:
 
 @njit(cache=True)
 def _trapezoid_matrix(qa, qb, limits):
-    v = limits.velocity
-    acc = limits.acceleration
-    n = v.shape[0]
-    # joint j reaches full speed beyond the distance v^2 / a
-    full = np.empty(n)
-    for j in range(n):
-        full[j] = v[j] * v[j] / acc[j]
+    inv_v = 1.0 / limits.velocity
+    inv_a = 1.0 / limits.acceleration
+    n = inv_v.shape[0]
     out = np.empty((qa.shape[0], qb.shape[0]))
     for r in range(qa.shape[0]):
         for c in range(qb.shape[0]):
-            t = 0.0
+            tv = 0.0  # 1 / V: the path parameter's speed limit
+            ta = 0.0  # 1 / A: its acceleration limit
             for j in range(n):
                 d = abs(qb[c, j] - qa[r, j])
-                if d <= full[j]:
-                    tj = 2.0 * math.sqrt(d / acc[j])
-                else:
-                    tj = d / v[j] + v[j] / acc[j]
-                if tj > t:
-                    t = tj
-            out[r, c] = t
+                x = d * inv_v[j]
+                if x > tv:
+                    tv = x
+                y = d * inv_a[j]
+                if y > ta:
+                    ta = y
+            if tv == 0.0:
+                out[r, c] = 0.0
+            elif ta >= tv * tv:  # full speed never reached: a triangle
+                out[r, c] = 2.0 * math.sqrt(ta)
+            else:
+                out[r, c] = tv + ta / tv
     return out
 
 
@@ -91,35 +95,62 @@ def trapezoid_leg_times(qa: Any, qb: Any, limits: JointLimits) -> np.ndarray:
     return _trapezoid_matrix(a, b, limits)  # type: ignore[no-any-return]
 
 
-def ruckig_trajectory(q0: Any, q1: Any, velocity: Any, acceleration: Any,
-                      jerk: Any = None) -> Any:
-    """Ruckig's time-optimal rest-to-rest ``Trajectory`` q0 -> q1 (offline API).
+class StraightLeg:
+    """A rest-to-rest straight joint line q0 + (q1 - q0) s(t), s from 0 to 1 by ruckig.
 
-    ``jerk`` None: no jerk limit (a trapezoid per joint). ParameterError if
-    ruckig cannot plan the move.
+    ``s`` is ruckig's time-optimal 1-D profile under the tightest scaled limits
+    (``min_j v_j / d_j``, ``min_j a_j / d_j``, ``min_j jerk_j / d_j``), so every joint
+    keeps its limits and the arm stays on the line the collision sweep checked.
+    """
+
+    def __init__(self, q0: np.ndarray, q1: np.ndarray, traj: Any) -> None:
+        self.q0 = q0
+        self.dq = q1 - q0
+        self._traj = traj
+        self.duration = float(traj.duration)
+
+    def at_time(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q, qd, qdd), each (n,), at leg time t (s)."""
+        p, v, a = self._traj.at_time(float(t))
+        return self.q0 + self.dq * p[0], self.dq * v[0], self.dq * a[0]
+
+
+def ruckig_trajectory(q0: Any, q1: Any, velocity: Any, acceleration: Any,
+                      jerk: Any = None) -> StraightLeg:
+    """Time-optimal rest-to-rest straight joint line q0 -> q1 (:class:`StraightLeg`).
+
+    ``jerk`` None: no jerk limit (a trapezoid). ParameterError if the two are equal
+    or ruckig cannot plan the move.
     """
     from ruckig import InputParameter, Result, Ruckig, Trajectory
 
     a = np.asarray(q0, dtype=np.float64)
     b = np.asarray(q1, dtype=np.float64)
-    n = a.size
-    otg = Ruckig(n)
-    inp = InputParameter(n)
-    inp.current_position = a.tolist()
-    inp.target_position = b.tolist()
-    inp.current_velocity = [0.0] * n
-    inp.current_acceleration = [0.0] * n
-    inp.target_velocity = [0.0] * n
-    inp.target_acceleration = [0.0] * n
-    inp.max_velocity = [float(x) for x in velocity]
-    inp.max_acceleration = [float(x) for x in acceleration]
-    inp.max_jerk = [math.inf] * n if jerk is None else [float(x) for x in jerk]
-    traj = Trajectory(n)
+    d = np.abs(b - a)
+    if not d.any():
+        raise ParameterError("ruckig_trajectory: q0 and q1 are the same")
+    moving = d > 0
+    v_s = float(np.min(np.asarray(velocity, dtype=np.float64)[moving] / d[moving]))
+    a_s = float(np.min(np.asarray(acceleration, dtype=np.float64)[moving] / d[moving]))
+    j_s = (math.inf if jerk is None
+           else float(np.min(np.asarray(jerk, dtype=np.float64)[moving] / d[moving])))
+    otg = Ruckig(1)
+    inp = InputParameter(1)
+    inp.current_position = [0.0]
+    inp.target_position = [1.0]
+    inp.current_velocity = [0.0]
+    inp.current_acceleration = [0.0]
+    inp.target_velocity = [0.0]
+    inp.target_acceleration = [0.0]
+    inp.max_velocity = [v_s]
+    inp.max_acceleration = [a_s]
+    inp.max_jerk = [j_s]
+    traj = Trajectory(1)
     status = otg.calculate(inp, traj)
     if status not in (Result.Working, Result.Finished):
         raise ParameterError(f"ruckig cannot plan the joint move {a.tolist()} -> "
                              f"{b.tolist()}: {status}")
-    return traj
+    return StraightLeg(a, b, traj)
 
 
 def ruckig_leg_time(q0: Any, q1: Any, velocity: Any, acceleration: Any,
@@ -130,5 +161,5 @@ def ruckig_leg_time(q0: Any, q1: Any, velocity: Any, acceleration: Any,
     return float(ruckig_trajectory(q0, q1, velocity, acceleration, jerk).duration)
 
 
-__all__ = ["JointLimits", "joint_limits", "ruckig_leg_time", "ruckig_trajectory",
+__all__ = ["JointLimits", "StraightLeg", "joint_limits", "ruckig_leg_time", "ruckig_trajectory",
            "trapezoid_leg_times"]
