@@ -38,6 +38,8 @@ from subtask_opt.base.errors import InputDataError
 
 PEERS = ("robotsp", "tsp_cspace", "elkai_gtsp")
 HOME_DEG = (0.0, -20.0, 130.0, 0.0, 70.0, 0.0)
+ALTERNATIVES_MAX_HOLES = 100
+"""Largest subset whose configurations include the +-2 pi alternatives by default."""
 
 
 def _load(data_dir: Path) -> tuple[np.ndarray, dict[str, list[int]], dict[str, Any]]:
@@ -73,11 +75,17 @@ def _manipulability(arm: Any, layers: list[np.ndarray]) -> list[np.ndarray]:
 
 def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: int = 0,
                peers: tuple[str, ...] = PEERS, validate_dt: float = 0.01,
-               peer_functions: dict[str, Callable[..., Any]] | None = None) -> dict[str, Any]:
+               peer_functions: dict[str, Callable[..., Any]] | None = None,
+               alternatives: bool | None = None) -> dict[str, Any]:
     """Every method on one subset; a JSON-ready dict of the figures.
+
+    ``alternatives``: add the +-2 pi alternatives of joints 4 and 6 (whose ranges
+    exceed 2 pi) as configurations of their own (about 3x as many); None: up to
+    :data:`ALTERNATIVES_MAX_HOLES` holes (the M x M leg matrix must fit in memory).
 
     ``peer_functions`` replaces peers by name (same contract as :mod:`subtask_opt.arm.peers`).
     """
+    from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import make_targets
     from subtask_opt.arm.scene import Scene
     from subtask_opt.arm.serial import load_serial_arm
@@ -90,9 +98,11 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
     home = np.radians(HOME_DEG)
     c0 = time.process_time()
-    problem = SerialProblem(targets, arm, home, scene=scene)
+    wrap = len(indices) <= ALTERNATIVES_MAX_HOLES if alternatives is None else alternatives
+    problem = SerialProblem(targets, arm, home, scene=scene,
+                            ik=IKParams(wrap_alternatives=bool(wrap)))
     build_cpu = time.process_time() - c0
-    out: dict[str, Any] = {"holes": len(indices),
+    out: dict[str, Any] = {"holes": len(indices), "wrap_alternatives": bool(wrap),
                            "configurations_per_hole": float(problem.counts.mean()),
                            "configurations": int(problem.offsets[-1]),
                            "methods": {}}

@@ -34,7 +34,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from subtask_opt.cli import agv, batch, grid, polygon, reactive, solve, tsp
+    from subtask_opt.cli import agv, batch, grid, polygon, reactive, robotsp, solve, tsp
 
     parser = _Parser(
         prog="subtask-opt",
@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     solve.register(root)
     tsp.register(root)
     batch.register(root)
-    for family in (grid, polygon, reactive, agv):
+    for family in (grid, polygon, reactive, agv, robotsp):
         family.register(plan, bench)
     return parser
 
