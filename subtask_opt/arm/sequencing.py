@@ -418,6 +418,7 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     n = problem.size
     paper = params.preset == "paper"
     configured = isinstance(problem, SequencingProblem) and problem.optimizes_configurations
+    data: np.ndarray | ConfiguredData
     if configured:
         assert isinstance(problem, SequencingProblem)
         search = SEARCH_PAPER if paper else SEARCH_FAST
