@@ -318,10 +318,8 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     n = problem.size
     cpu = dict(problem.cpu)
     cpu["search"] = 0.0
-    legs = np.array(problem.legs)
-    home_out = np.array(problem.home_out)
-    home_in = np.array(problem.home_in)
-    penalty = penalty_for_legs(np.concatenate([legs.ravel(), home_out, home_in]), n)
+    penalty = penalty_for_legs(np.concatenate([problem.legs.ravel(), problem.home_out,
+                                               problem.home_in]), n)
     search = SEARCH_PAPER if params.preset == "paper" else SEARCH_FAST
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
                       mutation_rate=0.0, restart_on_convergence=True,
@@ -330,11 +328,15 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     checked: dict[tuple[int, int], bool] = {}  # (from, to) flat index, -1 = home -> collides
     generations = restarts = 0
     rounds = 0
+    t0 = time.process_time()
+    # packed once (copies); legs found in collision are then blocked in place
+    data = pack_layers(problem.legs, off, home_out=problem.home_out, home_in=problem.home_in,
+                       penalty=penalty, search=search)
+    owner = np.repeat(np.arange(n), np.diff(off))
+    cpu["search"] += time.process_time() - t0
     while True:
         rounds += 1
         t0 = time.process_time()
-        data = pack_layers(legs, off, home_out=home_out, home_in=home_in, penalty=penalty,
-                           search=search)
         if n == 1:
             genes = np.zeros(1, dtype=np.int64)
         else:
@@ -369,12 +371,15 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
                 checked[key] = problem.checker.leg_in_collision(qa, qb, problem.clearance)
             if checked[key]:
                 new_blocked = True
-                if a < 0:
-                    home_out[b] = home_in[b] = penalty
-                elif b < 0:
-                    home_out[a] = home_in[a] = penalty
+                if a < 0 or b < 0:
+                    data.home_out[max(a, b)] = data.home_in[max(a, b)] = penalty
                 else:
-                    legs[a, b] = legs[b, a] = penalty
+                    data.legs[a, b] = data.legs[b, a] = penalty
+                    ta, tb = owner[a], owner[b]
+                    block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
+                    data.dist[ta, tb] = block.min()
+                    data.dist[tb, ta] = data.legs[off[tb]:off[tb + 1],
+                                                  off[ta]:off[ta + 1]].min()
         cpu["collision"] += time.process_time() - t0
         if not new_blocked:
             break
