@@ -1,26 +1,32 @@
-"""Tours with a configuration per subtask: the generalised TSP of elbow branches.
+"""Tours with a configuration per target: the generalised TSP (GTSP) decode.
 
-Each subtask can be visited in one of two configurations (elbow-down 0,
-elbow-up 1); the time of a leg depends on both ends' configurations. A
-chromosome is still a permutation (the order); its configurations are not
-genes but are *decoded* exactly: for a fixed cyclic order, the best choice of
-one configuration per subtask is a shortest path through a 2-state-per-step
-chain, solved by dynamic programming in O(8 N) for each of the two
-configurations of the first subtask.
+Each target ``i`` can be visited in one of ``K_i`` configurations (2 elbow
+branches of a planar 2R arm; every IK solution of a serial arm); the time of a
+leg depends on both ends' configurations. The configurations of all targets
+form one flat list, target ``i`` owning the entries
+``offsets[i] .. offsets[i + 1] - 1``. A chromosome is still a permutation of
+the targets (the order); the configurations are not genes but are *decoded*
+exactly: for a fixed order the best choice of one configuration per target is
+a shortest path through the layers of configurations, a dynamic programme of
+O(sum_k K_k K_(k+1)) = O(N K^2) per decode.
 
-``data`` is (N, 5 N) float64:
+Two tour shapes:
 
-* ``data[:, :N]`` - the cheapest time of each leg over its four configuration
-  pairs, which the permutation operators of :mod:`subtask_opt.ga.permutation`
-  (greedy crossover, nearest-neighbour construction) use as their distances;
-* ``data[i, N + (2 ci + cj) N + j]`` - the time from subtask i in configuration
-  ci to subtask j in configuration cj (a large finite penalty where that is
-  impossible).
+* **with a home configuration** (``home_out``/``home_in`` non-empty): home ->
+  targets in gene order -> home, one layered shortest path;
+* **closed tour without home** (the planar problems): one layered shortest
+  path per configuration of the first target, O(N K^3), linear in N (the 2R
+  arm: 2 passes, exactly today's answers and tie-breaking: the lowest
+  configuration index wins a tie).
 
-``aux`` is the permutation ``aux`` (:func:`subtask_opt.ga.permutation.make_aux`).
+The permutation operators of :mod:`subtask_opt.ga.permutation` (greedy
+crossover, nearest-neighbour construction, kicks) see ``data.dist``, the
+cheapest time of each target-to-target leg over its configuration pairs.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -30,67 +36,133 @@ from subtask_opt.ga.dispatch import OperatorSet, register
 from subtask_opt.ga.kinds import Kind
 
 
-@njit(cache=True)
-def leg(data, i, ci, j, cj):
-    """Time from subtask i in configuration ci to subtask j in configuration cj."""
-    n = data.shape[0]
-    return data[i, n + (2 * ci + cj) * n + j]
+class ConfiguredData(NamedTuple):
+    """What the configured-permutation operators read (the GA's ``data``).
+
+    Attributes:
+        dist: (N, N) cheapest leg time between targets over their configuration
+            pairs, zero diagonal (the permutation operators' distances).
+        offsets: (N + 1,) int64; target i owns configurations offsets[i]..offsets[i+1]-1.
+        legs: (M, M) leg time between configurations (a large finite penalty
+            where a leg is impossible).
+        home_out: (M,) time home -> each configuration; empty (0,) for a closed
+            tour without home.
+        home_in: (M,) time each configuration -> home; empty likewise.
+        search: how the operators search, :data:`subtask_opt.ga.permutation.SEARCH_PAPER`
+            (random restarts, no local search) or another mode (kicked restarts and
+            alternating decode + exact 2-opt/Or-opt).
+    """
+
+    dist: np.ndarray
+    offsets: np.ndarray
+    legs: np.ndarray
+    home_out: np.ndarray
+    home_in: np.ndarray
+    search: float
 
 
 @njit(cache=True)
 def decode(genes, length, data, configs):
-    """Best configurations for the cyclic order ``genes[:length]``; returns the tour time.
+    """Best configurations for the order ``genes[:length]``; returns the tour time.
 
-    ``configs`` (indexed by subtask) receives the chosen configurations.
+    ``configs`` (indexed by target) receives the chosen configuration of each
+    target as an index *within* the target (0 .. K_i - 1).
     """
     n = length
-    pred = np.zeros((n, 2), dtype=np.int64)
+    off = data.offsets
+    legs = data.legs
+    kmax = 1
+    for i in range(off.shape[0] - 1):
+        kmax = max(kmax, off[i + 1] - off[i])
+    pred = np.zeros((n, kmax), dtype=np.int64)
+    cost = np.empty(kmax)
+    new = np.empty(kmax)
+    has_home = data.home_out.shape[0] > 0
+    first = genes[0]
+    k_first = off[first + 1] - off[first]
+    n_starts = 1 if has_home else k_first
     best_total = np.inf
-    for c0 in range(2):
-        cost0 = 0.0 if c0 == 0 else np.inf
-        cost1 = 0.0 if c0 == 1 else np.inf
+    for c0 in range(n_starts):
+        for c in range(k_first):
+            if has_home:
+                cost[c] = data.home_out[off[first] + c]
+            else:
+                cost[c] = 0.0 if c == c0 else np.inf
         for k in range(1, n):
             a = genes[k - 1]
             b = genes[k]
-            # from configuration 0 or 1 of a into configuration 0 and 1 of b
-            a00 = cost0 + leg(data, a, 0, b, 0)
-            a10 = cost1 + leg(data, a, 1, b, 0)
-            a01 = cost0 + leg(data, a, 0, b, 1)
-            a11 = cost1 + leg(data, a, 1, b, 1)
-            pred[k, 0] = 0 if a00 <= a10 else 1
-            pred[k, 1] = 0 if a01 <= a11 else 1
-            cost0 = min(a00, a10)
-            cost1 = min(a01, a11)
+            ka = off[a + 1] - off[a]
+            kb = off[b + 1] - off[b]
+            for cb in range(kb):
+                col = off[b] + cb
+                best = cost[0] + legs[off[a], col]
+                arg = 0
+                for ca in range(1, ka):
+                    v = cost[ca] + legs[off[a] + ca, col]
+                    if v < best:
+                        best = v
+                        arg = ca
+                new[cb] = best
+                pred[k, cb] = arg
+            for cb in range(kb):
+                cost[cb] = new[cb]
         last = genes[n - 1]
-        tot0 = cost0 + leg(data, last, 0, genes[0], c0)
-        tot1 = cost1 + leg(data, last, 1, genes[0], c0)
-        c_last = 0 if tot0 <= tot1 else 1
-        total = min(tot0, tot1)
+        k_last = off[last + 1] - off[last]
+        if has_home:
+            total = cost[0] + data.home_in[off[last]]
+            c_last = 0
+            for c in range(1, k_last):
+                v = cost[c] + data.home_in[off[last] + c]
+                if v < total:
+                    total = v
+                    c_last = c
+        else:
+            total = cost[0] + legs[off[last], off[first] + c0]
+            c_last = 0
+            for c in range(1, k_last):
+                v = cost[c] + legs[off[last] + c, off[first] + c0]
+                if v < total:
+                    total = v
+                    c_last = c
         if total < best_total:
             best_total = total
             c = c_last
             for k in range(n - 1, 0, -1):
                 configs[genes[k]] = c
                 c = pred[k, c]
-            configs[genes[0]] = c0
+            configs[genes[0]] = c if has_home else c0
     return best_total
 
 
 @njit(cache=True)
 def tour_cost(genes, length, data, aux):
     """Tour time with the best configurations (the ``evaluate`` operator)."""
-    configs = np.empty(data.shape[0], dtype=np.int64)
+    configs = np.empty(data.dist.shape[0], dtype=np.int64)
     return decode(genes, length, data, configs)
 
 
 @njit(cache=True)
 def induced_matrix(data, configs):
-    """(N, N) leg times for fixed configurations."""
-    n = data.shape[0]
+    """(N, N) leg times for fixed configurations (per-target indices)."""
+    n = data.dist.shape[0]
+    off = data.offsets
     out = np.empty((n, n))
     for i in range(n):
         for j in range(n):
-            out[i, j] = leg(data, i, configs[i], j, configs[j])
+            out[i, j] = data.legs[off[i] + configs[i], off[j] + configs[j]]
+    return out
+
+
+@njit(cache=True)
+def _induced_with_home(data, configs):
+    """(N + 1, N + 1) leg times for fixed configurations, node N being home."""
+    n = data.dist.shape[0]
+    off = data.offsets
+    out = np.zeros((n + 1, n + 1))
+    out[:n, :n] = induced_matrix(data, configs)
+    for i in range(n):
+        out[n, i] = data.home_out[off[i] + configs[i]]
+        out[i, n] = data.home_in[off[i] + configs[i]]
     return out
 
 
@@ -99,15 +171,29 @@ def local_search(genes, length, data, aux):
     """Alternate exact decoding and 2-opt/Or-opt on the decoded configurations.
 
     Each round fixes the configurations the decoder chose, improves the order
-    on that (N, N) matrix to a local optimum, and decodes again; the tour time
-    never increases, and the loop ends when a round gains nothing.
+    on that matrix (with home as an extra node when the tour has one) to a
+    local optimum, and decodes again; the tour time never increases, and the
+    loop ends when a round gains nothing.
     """
     n = length
-    configs = np.empty(data.shape[0], dtype=np.int64)
+    configs = np.empty(data.dist.shape[0], dtype=np.int64)
     cost = decode(genes, n, data, configs)
+    has_home = data.home_out.shape[0] > 0
+    ext = np.empty(n + 1, dtype=genes.dtype)
     for _ in range(100):  # bounded; a round that gains nothing ends it earlier
-        fixed = induced_matrix(data, configs)
-        tsp.exact_local_search(genes, n, fixed, aux)
+        if has_home:
+            fixed = _induced_with_home(data, configs)
+            ext[0] = n  # home
+            ext[1:] = genes[:n]
+            tsp.exact_local_search(ext, n + 1, fixed, aux)
+            h = 0
+            while ext[h] != n:
+                h += 1
+            for k in range(n):
+                genes[k] = ext[(h + 1 + k) % (n + 1)]
+        else:
+            fixed = induced_matrix(data, configs)
+            tsp.exact_local_search(genes, n, fixed, aux)
         new_cost = decode(genes, n, data, configs)
         if new_cost >= cost - 1e-12 * max(1.0, abs(cost)):
             break
@@ -118,18 +204,29 @@ def local_search(genes, length, data, aux):
 @njit(cache=True)
 def randomize(genes, data, aux, rng, best, best_len):
     """Random tours for the paper's search, kicks of the best otherwise."""
-    if aux[tsp.AUX_SEARCH] == tsp.SEARCH_PAPER:
-        return tsp.random_tour(genes, data, aux, rng, best, best_len)
-    return tsp.kicked_best(genes, data, aux, rng, best, best_len)
+    if data.search == tsp.SEARCH_PAPER:
+        return tsp.random_tour(genes, data.dist, aux, rng, best, best_len)
+    return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
+
+
+@njit(cache=True)
+def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
+    """Greedy crossover on the cheapest target-to-target times."""
+    return tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
+
+
+@njit(cache=True)
+def no_mutation(genes, length, data, aux, rng, strength):
+    return length
 
 
 @njit(cache=True)
 def improve(genes, length, data, aux):
     """Alternating decoding and local search, except for the paper's search."""
-    if aux[tsp.AUX_SEARCH] == tsp.SEARCH_PAPER:
+    if data.search == tsp.SEARCH_PAPER:
         return length
     return local_search(genes, length, data, aux)
 
 
 register(Kind.CONFIGURED_PERMUTATION,
-         OperatorSet(randomize, tour_cost, tsp.greedy_crossover, tsp.no_mutation, improve))
+         OperatorSet(randomize, tour_cost, crossover, no_mutation, improve))

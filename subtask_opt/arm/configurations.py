@@ -21,7 +21,9 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.arm import _configuration_kernels as _gc
+from subtask_opt.arm._configuration_kernels import ConfiguredData
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.ga.permutation import SEARCH_FAST
 
 
 def _validated_tensor(branch_times: Any) -> np.ndarray:
@@ -45,23 +47,72 @@ def penalty_for(branch_times: np.ndarray) -> float:
     return (branch_times.shape[0] + 1) * top + 1.0
 
 
-def pack_data(branch_times: Any) -> tuple[np.ndarray, float]:
-    """The (N, 5N) ``data`` of :mod:`subtask_opt.arm._configuration_kernels`, and its penalty.
+def pack_layers(legs: Any, offsets: Any, *, home_out: Any = None, home_in: Any = None,
+                penalty: float | None = None, search: float = SEARCH_FAST) -> ConfiguredData:
+    """The GA ``data`` of a generalised TSP over a flat configuration list.
 
-    Impossible legs (inf) become the finite :func:`penalty_for`, so the GA can
-    rank tours that use them below every tour that does not.
+    Args:
+        legs: (M, M) leg times between configurations (inf: impossible).
+        offsets: (N + 1,) target i owns configurations offsets[i] .. offsets[i+1]-1
+            (every target at least one).
+        home_out, home_in: (M,) times home -> configuration and configuration ->
+            home; both None for a closed tour without home.
+        penalty: the finite time that replaces inf (default :func:`penalty_for` of ``legs``).
+        search: the operators' search mode (see :class:`ConfiguredData`).
+    """
+    m = np.asarray(legs, dtype=np.float64)
+    off = np.asarray(offsets, dtype=np.int64)
+    if m.ndim != 2 or m.shape[0] != m.shape[1]:
+        raise InputDataError(f"legs must be a square (M, M) array, got shape {m.shape}")
+    if off.ndim != 1 or off.size < 2 or off[0] != 0 or off[-1] != m.shape[0] or np.any(
+            np.diff(off) < 1):
+        raise InputDataError(f"offsets must rise strictly from 0 to M = {m.shape[0]}, "
+                             f"got {off.tolist()[:10]}")
+    if np.isnan(m).any() or (m < 0).any():
+        raise InputDataError("legs must be >= 0 (inf where a leg is impossible)")
+    if (home_out is None) != (home_in is None):
+        raise ParameterError("home_out and home_in must both be given or both be None")
+    n = off.size - 1
+    if penalty is None:
+        penalty = penalty_for_legs(m, n)
+    safe = np.where(np.isfinite(m), m, penalty)
+    if home_out is None:
+        h_out = np.zeros(0)
+        h_in = np.zeros(0)
+    else:
+        h_out = np.where(np.isfinite(home_out), np.asarray(home_out, np.float64), penalty)
+        h_in = np.where(np.isfinite(home_in), np.asarray(home_in, np.float64), penalty)
+        if h_out.shape != (m.shape[0],) or h_in.shape != (m.shape[0],):
+            raise InputDataError(f"home_out and home_in must have shape ({m.shape[0]},)")
+    # cheapest time between targets: min over rows of each block, then over columns
+    row_min = np.minimum.reduceat(safe, off[:-1], axis=0)
+    dist = np.minimum.reduceat(row_min, off[:-1], axis=1)
+    np.fill_diagonal(dist, 0.0)
+    return ConfiguredData(np.ascontiguousarray(dist), off, np.ascontiguousarray(safe),
+                          np.ascontiguousarray(h_out), np.ascontiguousarray(h_in),
+                          float(search))
+
+
+def penalty_for_legs(legs: np.ndarray, n_targets: int) -> float:
+    """(N + 2) times the largest finite leg (plus 1): one impossible leg costs more than
+    every tour (with home: N + 1 legs) made only of possible ones."""
+    finite = legs[np.isfinite(legs)]
+    top = float(finite.max()) if finite.size else 1.0
+    return (n_targets + 2) * top + 1.0
+
+
+def pack_data(branch_times: Any) -> tuple[ConfiguredData, float]:
+    """The GA ``data`` (:class:`ConfiguredData`) of a 2R arm's branch times, and its penalty.
+
+    Configuration ``2 i + c`` is subtask i on branch c. Impossible legs (inf)
+    become the finite :func:`penalty_for`, so the GA can rank tours that use
+    them below every tour that does not.
     """
     t = _validated_tensor(branch_times)
     n = t.shape[0]
     penalty = penalty_for(t)
-    safe = np.where(np.isfinite(t), t, penalty)
-    data = np.empty((n, 5 * n))
-    data[:, :n] = safe.min(axis=(1, 3))
-    for ci in range(2):
-        for cj in range(2):
-            block = n + (2 * ci + cj) * n
-            data[:, block:block + n] = safe[:, ci, :, cj]
-    np.fill_diagonal(data[:, :n], 0.0)
+    legs = t.reshape(2 * n, 2 * n)
+    data = pack_layers(legs, np.arange(0, 2 * n + 1, 2), penalty=penalty)
     return data, penalty
 
 
@@ -103,4 +154,5 @@ def induced_matrix(branch_times: Any, configurations: Any) -> np.ndarray:
     return m
 
 
-__all__ = ["best_configurations", "gather", "induced_matrix", "pack_data", "penalty_for"]
+__all__ = ["ConfiguredData", "best_configurations", "gather", "induced_matrix", "pack_data",
+           "pack_layers", "penalty_for", "penalty_for_legs"]

@@ -22,6 +22,7 @@ import numpy as np
 
 from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
+from subtask_opt.arm._configuration_kernels import ConfiguredData
 from subtask_opt.arm.bound import lower_bound
 from subtask_opt.arm.configurations import penalty_for
 from subtask_opt.arm.report import TourReport, tour_report
@@ -216,7 +217,7 @@ class SequencingProblem:
     line_fallback: str = "joint"
     timing: TimingResult = field(init=False, compare=False, repr=False)
     _matrix: np.ndarray = field(init=False, compare=False, repr=False)
-    _data: np.ndarray | None = field(default=None, init=False, compare=False, repr=False)
+    _data: ConfiguredData | None = field(default=None, init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         from subtask_opt.arm.model import Arm
@@ -285,7 +286,7 @@ class SequencingProblem:
         """Whether :func:`solve` chooses the elbow configurations."""
         return self._data is not None
 
-    def configured_data(self) -> np.ndarray:
+    def configured_data(self) -> ConfiguredData:
         """The per-configuration leg times the GA decodes (``configurations="optimize"``)."""
         if self._data is None:
             raise ParameterError("this problem has fixed configurations")
@@ -439,15 +440,18 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     n = problem.size
     paper = params.preset == "paper"
     configured = isinstance(problem, SequencingProblem) and problem.optimizes_configurations
+    data: np.ndarray | ConfiguredData
     if configured:
         assert isinstance(problem, SequencingProblem)
-        data = problem.configured_data()
-        kind = Kind.CONFIGURED_PERMUTATION
         search = SEARCH_PAPER if paper else SEARCH_FAST
-        neighbours = neighbour_table(data[:, :n], params.neighbours)
+        data = problem.configured_data()._replace(search=search)
+        dist = data.dist
+        kind = Kind.CONFIGURED_PERMUTATION
+        neighbours = neighbour_table(dist, params.neighbours)
     else:
         # a GA tour may not use an excluded leg: a finite penalty keeps the costs comparable
         data = np.where(np.isfinite(matrix), matrix, penalty_for(matrix))
+        dist = data
         neighbours = neighbour_table(matrix, params.neighbours)
         kind = Kind.PERMUTATION
         if paper:
@@ -456,9 +460,9 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             search = SEARCH_FAST if problem.symmetric else SEARCH_EXACT
     bound = None
     if n <= params.bound_max_nodes:
-        # every leg costs at least data[:, :n] (the cheapest configuration pair), so a
+        # every leg costs at least dist (the cheapest configuration pair), so a
         # bound of that matrix bounds the tour; a tour that meets it is proven optimal
-        bound = lower_bound(data[:, :n], seed=0)
+        bound = lower_bound(dist, seed=0)
         if stop is None:
             criteria = [*criteria, TargetCost(bound * (1 + 1e-12) + 1e-12)]
     aux = make_aux(neighbours, nearest_fallback=not paper,

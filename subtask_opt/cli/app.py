@@ -34,11 +34,11 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from subtask_opt.cli import agv, batch, grid, polygon, reactive, reproduce, solve, tsp
+    from subtask_opt.cli import agv, batch, grid, polygon, reactive, reproduce, robotsp, solve, tsp
 
     parser = _Parser(
         prog="subtask-opt",
-        description="Minimum-time subtask sequencing for a planar arm, and mobile-robot planners.",
+        description="Minimum-time subtask sequencing for robot arms, and mobile-robot planners.",
     )
     root = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     root.required = True
@@ -52,7 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     tsp.register(root)
     batch.register(root)
     reproduce.register(root)
-    for family in (grid, polygon, reactive, agv):
+    for family in (grid, polygon, reactive, agv, robotsp):
         family.register(plan, bench)
     return parser
 

@@ -88,10 +88,13 @@ def register(root: argparse._SubParsersAction) -> None:
                      help="write a GIF of the arm executing the tour")
     out.add_argument("--quiet", action="store_true", help="print only the summary (no leg table)")
     add_no_progress(out)
+    _add_serial_options(p)
     p.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if _is_serial(args):
+        return _run_serial(args)
     from subtask_opt.arm.model import load_arm
     from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
     from subtask_opt.arm.tasks import CASE_NAMES, builtin_case, load_subtasks
@@ -187,3 +190,106 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, trajectory: Any) -
         animate_tour(problem, trajectory, args.animate,
                      progress=not args.no_progress and sys.stderr.isatty())
         print(f"wrote {args.animate}")
+
+
+# ---------------------------------------------------------------- serial arms (6-/7-DOF)
+
+_SERIAL_FLAGS = ("home", "scene", "standoff", "axis_step", "tool_frame", "limits")
+
+
+def _add_serial_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group(
+        "serial arms (--robot ur3|ur5|ur10|panda|vs060_drill|PATH.urdf; --case is a CSV of "
+        "x,y,z,dx,dy,dz or x,y,z,qx,qy,qz,qw rows)")
+    g.add_argument("--home", type=_degrees, metavar="Q1,...,QN",
+                   help="home configuration in degrees; the tour starts and ends there "
+                        "(default: the robot file's home, if any)")
+    g.add_argument("--scene", metavar="SCENE.json",
+                   help='boxes to avoid: {"boxes": [{"name", "center", "half_extents", '
+                        '"rotation"}]}')
+    g.add_argument("--standoff", type=float_in(-1.0, 1.0), default=None, metavar="M",
+                   help="tool standoff along its axis in metres (default 0)")
+    g.add_argument("--axis-step", type=float_in(0.0, 360.0, open_low=True), default=None,
+                   metavar="DEG", help="sampling step of the free rotation about a tool axis "
+                                       "(default 45)")
+    g.add_argument("--tool-frame", metavar="FRAME", help="tool frame (default: the robot's)")
+    g.add_argument("--limits", metavar="NAME|FILE.json",
+                   help="a named limit set of the robot or a JSON file of per-joint limits")
+
+
+def _degrees(text: str) -> tuple[float, ...]:
+    """Comma-separated finite joint values (degrees)."""
+    import math
+
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated numbers (degrees), got {text!r}") from None
+    if not values or not all(math.isfinite(v) and abs(v) <= 1e4 for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite degrees in [-1e4, 1e4], got {text!r}")
+    return values
+
+
+def _is_serial(args: argparse.Namespace) -> bool:
+    from subtask_opt.arm.serial import SERIAL_ROBOT_NAMES
+
+    if args.robot in SERIAL_ROBOT_NAMES or any(
+            getattr(args, f) is not None for f in _SERIAL_FLAGS):
+        return True
+    return str(args.robot).lower().endswith(".urdf") and _movable_joints(args.robot) != 2
+
+
+def _movable_joints(urdf: str) -> int:
+    """Number of revolute/prismatic/continuous joints of a URDF (-1 if unreadable)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(urdf).getroot()
+    except (OSError, ET.ParseError):
+        return -1
+    return sum(j.get("type") in ("revolute", "prismatic", "continuous")
+               for j in root.iter("joint"))
+
+
+def _run_serial(args: argparse.Namespace) -> int:
+    from subtask_opt.arm.sequencing import SolverParams
+    from subtask_opt.arm.serial_problem import serial_problem_from_files, solve_serial
+    from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
+    from subtask_opt.base.errors import ParameterError
+
+    if args.time_model != "joint":
+        raise ParameterError(f"--time-model {args.time_model}: serial arms use the joint "
+                             "model only")
+    refuse_overwriting_inputs([args.case, args.robot, args.scene, args.limits],
+                              [args.json, args.trajectory])
+    problem = serial_problem_from_files(
+        args.robot, args.case, scene=args.scene, home_deg=args.home,
+        standoff=0.0 if args.standoff is None else args.standoff,
+        axis_step=45.0 if args.axis_step is None else args.axis_step,
+        tool_frame=args.tool_frame, limits=args.limits)
+    stop = stop_criteria(args)
+    params = SolverParams(preset=args.preset)
+    if stop is not None and all(isinstance(c, TargetCost) for c in stop):
+        stop = stop + params.default_stop(problem.size)
+    result = solve_serial(problem, seed=args.seed, stop=stop, params=params)
+    print(result.summary())
+    trajectory = serial_trajectory(problem, result)
+    check = validate_serial_trajectory(trajectory, result, dt=min(args.dt, 0.005))
+    print(check.summary())
+    if args.json:
+        payload = result.to_dict()
+        payload["robot"] = problem.arm.name
+        payload["case"] = str(args.case)
+        payload["trajectory"] = {"duration": trajectory.duration, "valid": check.ok,
+                                 "violations": list(check.violations)}
+        write_json(args.json, payload)
+        print(f"wrote {args.json}")
+    if not check.ok:
+        print("subtask-opt: failed: the executed trajectory is invalid: "
+              + "; ".join(check.violations), file=sys.stderr)
+        return EXIT_FAILED
+    if args.trajectory:
+        trajectory.to_csv(args.trajectory, args.dt)
+        print(f"wrote {args.trajectory}")
+    return EXIT_OK

@@ -402,7 +402,7 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
 def run_ga(
     kind: Kind,
     config: GAConfig,
-    data: np.ndarray,
+    data: np.ndarray | tuple[object, ...],
     aux: np.ndarray,
     *,
     max_genes: int,
@@ -421,7 +421,8 @@ def run_ga(
         raise ParameterError(f"run_ga: no operators are registered for {kind!r}")
     require_int("run_ga", "max_genes", max_genes, 1)
     rng = np.random.default_rng(seed)
-    data = np.ascontiguousarray(data, dtype=np.float64)
+    if isinstance(data, np.ndarray):  # a kind may also take a NamedTuple of arrays
+        data = np.ascontiguousarray(data, dtype=np.float64)
     aux = np.ascontiguousarray(aux, dtype=np.float64)
     params: LoopParams = config.loop_params()
     pop = np.zeros((config.population, max_genes), dtype=np.int64)

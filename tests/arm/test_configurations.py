@@ -82,7 +82,7 @@ def _ga_on_tensor(t: np.ndarray, seed: int) -> float:
 
     n = t.shape[0]
     data, _ = pack_data(t)
-    aux = make_aux(neighbour_table(data[:, :n]), nearest_fallback=True, search=SEARCH_FAST)
+    aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=SEARCH_FAST)
     out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
                  criteria=[NoImprovement(15), MaxGenerations(50_000)])
     cost, _ = best_configurations(out.genes, t)

@@ -1,0 +1,201 @@
+"""RoboTSP's drilling benchmark (ICRA 2018) on our pipeline, beside its methods.
+
+The 245 holes of ``../shared/data/robotsp`` and RoboTSP's subsets (25 ... 245
+holes) on ``vs060_drill`` with RoboTSP's ``robotsp`` limit set, its home
+configuration, a 0.01 m standoff and a 45 degree axis step, the panel and the
+pedestal boxes as the scene. One :class:`~subtask_opt.arm.serial_problem.SerialProblem`
+per subset (IK, collision filter, leg matrix) is shared by every method:
+
+* ``ours``: :func:`~subtask_opt.arm.serial_problem.solve_serial`;
+* ``robotsp``: RoboTSP's method (Euclidean TSP on the hole positions, then
+  the best configurations through the layers in that order);
+* ``tsp_cspace``: the most manipulable configuration per hole, then a TSP in
+  joint space;
+* ``elkai_gtsp``: LKH on the GTSP (Noon-Bean), a GLKH stand-in.
+
+The three peers come from :mod:`subtask_opt.arm.peers` (imported lazily; a
+missing module or function is reported, not faked). Every answer is executed
+with the same ruckig legs and validated
+(:func:`~subtask_opt.arm.serial_trajectory.validate_serial_trajectory`). Our
+legs are swept for collisions and avoided; the peers' legs are straight joint
+moves whose collisions are only counted (RoboTSP plans such legs with BiRRT).
+RoboTSP's published figures (``published.json``) are printed beside ours as
+context: the robot frames were reconstructed, so absolute times compare only
+loosely.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from subtask_opt.base.errors import InputDataError
+
+PEERS = ("robotsp", "tsp_cspace", "elkai_gtsp")
+HOME_DEG = (0.0, -20.0, 130.0, 0.0, 70.0, 0.0)
+ALTERNATIVES_MAX_HOLES = 100
+"""Largest subset whose configurations include the +-2 pi alternatives by default."""
+
+
+def _load(data_dir: Path) -> tuple[np.ndarray, dict[str, list[int]], dict[str, Any]]:
+    try:
+        rows = np.loadtxt(data_dir / "targets.csv", delimiter=",", skiprows=1)
+        subsets = json.loads((data_dir / "subsets.json").read_text())["subsets"]
+        published = json.loads((data_dir / "published.json").read_text())
+    except (OSError, ValueError, KeyError) as exc:
+        raise InputDataError(f"cannot read the RoboTSP data in {data_dir}: {exc}") from None
+    return rows, subsets, published
+
+
+def _peer(name: str) -> Callable[..., Any] | str:
+    """The peer function, or why it is unavailable."""
+    try:
+        from subtask_opt.arm import peers  # type: ignore[attr-defined]
+    except ImportError as exc:
+        return f"subtask_opt.arm.peers not available ({exc})"
+    fn = getattr(peers, {"robotsp": "robotsp_method"}.get(name, name), None)
+    return fn if callable(fn) else f"subtask_opt.arm.peers has no {name}"
+
+
+def _manipulability(arm: Any, layers: list[np.ndarray]) -> list[np.ndarray]:
+    out = []
+    for q in layers:
+        values = []
+        for row in q:
+            jac = arm.jacobian(row)
+            values.append(float(np.sqrt(max(np.linalg.det(jac @ jac.T), 0.0))))
+        out.append(np.array(values))
+    return out
+
+
+def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: int = 0,
+               peers: tuple[str, ...] = PEERS, validate_dt: float = 0.01,
+               peer_functions: dict[str, Callable[..., Any]] | None = None,
+               alternatives: bool | None = None) -> dict[str, Any]:
+    """Every method on one subset; a JSON-ready dict of the figures.
+
+    ``alternatives``: add the +-2 pi alternatives of joints 4 and 6 (whose ranges
+    exceed 2 pi) as configurations of their own (about 3x as many); None: up to
+    :data:`ALTERNATIVES_MAX_HOLES` holes (the M x M leg matrix must fit in memory).
+
+    ``peer_functions`` replaces peers by name (same contract as :mod:`subtask_opt.arm.peers`).
+    """
+    from subtask_opt.arm.ik import IKParams
+    from subtask_opt.arm.poses import make_targets
+    from subtask_opt.arm.scene import Scene
+    from subtask_opt.arm.serial import load_serial_arm
+    from subtask_opt.arm.serial_problem import SerialProblem, evaluate_tour, solve_serial
+    from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
+    from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
+
+    arm = load_serial_arm("vs060_drill", limits="robotsp")
+    scene = Scene.load(data_dir / "obstacles.json")
+    targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
+    home = np.radians(HOME_DEG)
+    c0 = time.process_time()
+    wrap = len(indices) <= ALTERNATIVES_MAX_HOLES if alternatives is None else alternatives
+    problem = SerialProblem(targets, arm, home, scene=scene,
+                            ik=IKParams(wrap_alternatives=bool(wrap)))
+    build_cpu = time.process_time() - c0
+    out: dict[str, Any] = {"holes": len(indices), "wrap_alternatives": bool(wrap),
+                           "configurations_per_hole": float(problem.counts.mean()),
+                           "configurations": int(problem.offsets[-1]),
+                           "methods": {}}
+
+    def record(name: str, result: Any, cpu: dict[str, float]) -> None:
+        traj = serial_trajectory(problem, result)
+        check = validate_serial_trajectory(traj, result, dt=validate_dt)
+        out["methods"][name] = {
+            "executed_time_s": traj.duration, "valid": check.ok,
+            "violations": list(check.violations),
+            "legs_in_collision": result.counts["legs_infeasible"],
+            "cpu_s": cpu, "cpu_total_s": float(sum(cpu.values()))}
+
+    ours = solve_serial(problem, seed=seed)
+    record("ours", ours, dict(ours.cpu))
+    out["methods"]["ours"]["counts"] = ours.counts
+    out["methods"]["ours"]["legs_in_collision"] = evaluate_tour(
+        problem, ours.order, ours.configuration_index).counts["legs_infeasible"]
+    out["build_cpu_s"] = build_cpu
+
+    layers = [np.array(q) for q in problem.configurations]
+    limits = problem.limits
+
+    def leg_time(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
+        return trapezoid_leg_times(qa, qb, limits)
+
+    for name in peers:
+        fn = (peer_functions or {}).get(name) or _peer(name)
+        if isinstance(fn, str):
+            out["methods"][name] = {"unavailable": fn}
+            continue
+        c0 = time.process_time()
+        extra = 0.0
+        if name == "robotsp":
+            order, choice = fn(targets.points, layers, home, limits.velocity, leg_time)
+        elif name == "tsp_cspace":
+            m0 = time.process_time()
+            manip = _manipulability(arm, layers)
+            extra = time.process_time() - m0
+            order, choice = fn(layers, home, manip, leg_time)
+        else:
+            order, choice = fn(layers, home, leg_time, seed=seed)
+        search = time.process_time() - c0 - extra
+        cpu = {"ik": problem.cpu["ik"], "collision": problem.cpu["collision"],
+               "matrix": problem.cpu["matrix"] + extra, "search": search}
+        record(name, evaluate_tour(problem, order, choice, seed=seed, cpu=cpu), cpu)
+    return out
+
+
+def run(data_dir: str | Path, *, sizes: list[int] | None = None, seed: int = 0,
+        peers: tuple[str, ...] = PEERS,
+        peer_functions: dict[str, Callable[..., Any]] | None = None) -> dict[str, Any]:
+    """The benchmark over RoboTSP's subsets (``sizes``: which, default all)."""
+    data_dir = Path(data_dir)
+    rows, subsets, published = _load(data_dir)
+    chosen = sizes or [int(k) for k in subsets]
+    report: dict[str, Any] = {"robot": "vs060_drill (frames reconstructed from RoboTSP's files)",
+                              "seed": seed, "subsets": {}}
+    for size in chosen:
+        if str(size) not in subsets:
+            raise InputDataError(f"no subset of {size} holes; have {sorted(subsets)}")
+        report["subsets"][str(size)] = run_subset(rows, subsets[str(size)], data_dir=data_dir,
+                                                  seed=seed, peers=peers,
+                                                  peer_functions=peer_functions)
+    report["published"] = {m: dict(zip(published["number_of_targets"], v, strict=False))
+                           for m, v in published.get("execution_time_s", {}).items()}
+    return report
+
+
+def table(report: dict[str, Any]) -> str:
+    """The report as text: one row per subset and method."""
+    lines = [f"RoboTSP drilling benchmark on {report['robot']}, seed {report['seed']}",
+             f"{'holes':>5} {'method':<11} {'exec s':>8} {'valid':>5} {'coll':>4} "
+             f"{'IK s':>6} {'coll s':>6} {'matrix s':>8} {'search s':>8} {'conf/hole':>9} "
+             f"{'vs robotsp':>10}"]
+    for size, sub in report["subsets"].items():
+        ref = sub["methods"].get("robotsp", {}).get("executed_time_s")
+        for name, m in sub["methods"].items():
+            if "unavailable" in m:
+                lines.append(f"{size:>5} {name:<11} unavailable: {m['unavailable']}")
+                continue
+            c = m["cpu_s"]
+            ratio = f"{m['executed_time_s'] / ref:.3f}x" if ref else "-"
+            lines.append(f"{size:>5} {name:<11} {m['executed_time_s']:8.3f} "
+                         f"{'yes' if m['valid'] else 'NO':>5} {m['legs_in_collision']:>4} "
+                         f"{c.get('ik', 0):6.2f} {c.get('collision', 0):6.2f} "
+                         f"{c.get('matrix', 0):8.2f} {c.get('search', 0):8.2f} "
+                         f"{sub['configurations_per_hole']:9.1f} {ratio:>10}")
+    lines.append("published (RoboTSP's own robot model, BiRRT legs; context only):")
+    for method, per in report["published"].items():
+        cells = ", ".join(f"{k}: {'-' if v is None else f'{v:.1f} s'}" for k, v in per.items())
+        lines.append(f"  {method}: {cells}")
+    return "\n".join(lines)
+
+
+__all__ = ["PEERS", "run", "run_subset", "table"]

@@ -1,0 +1,32 @@
+"""RoboTSP's benchmark end to end on its smallest subset (benchmark-sized: ``-m bench``)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.conftest import SHARED_DATA
+
+DATA = SHARED_DATA / "robotsp"
+
+
+@pytest.mark.bench
+@pytest.mark.skipif(not (DATA / "targets.csv").is_file(), reason="RoboTSP data missing")
+def test_robotsp_25_holes_valid_and_beats_the_stand_in() -> None:
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    from subtask_opt.arm.robotsp_bench import run
+
+    spec = importlib.util.spec_from_file_location(
+        "robotsp_script", Path(__file__).resolve().parents[2] / "benchmarks" / "robotsp.py")
+    assert spec is not None and spec.loader is not None
+    script = importlib.util.module_from_spec(spec)
+    sys.modules["robotsp_script"] = script
+    spec.loader.exec_module(script)
+    report = run(DATA, sizes=[25], peers=("robotsp",),
+                 peer_functions={"robotsp": script.robotsp_stand_in})
+    methods = report["subsets"]["25"]["methods"]
+    assert methods["ours"]["valid"], methods["ours"]["violations"]
+    assert methods["ours"]["legs_in_collision"] == 0
+    assert methods["ours"]["executed_time_s"] < methods["robotsp"]["executed_time_s"]

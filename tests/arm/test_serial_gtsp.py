@@ -1,0 +1,185 @@
+"""The generalised TSP decode and search (ragged configurations, home) against brute force,
+and the closed-form joint leg times against ruckig and a direct formula."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from subtask_opt.arm import _configuration_kernels as gc
+from subtask_opt.arm.configurations import pack_layers
+from subtask_opt.arm.timing.joint_legs import (
+    joint_limits,
+    ruckig_leg_time,
+    trapezoid_leg_times,
+)
+from subtask_opt.base.errors import InputDataError, ParameterError
+
+
+def _random_instance(rng: np.random.Generator, n: int, kmax: int, n_joints: int = 3):
+    """Random configurations per target (ragged), trapezoid legs, a home configuration."""
+    counts = rng.integers(1, kmax + 1, size=n)
+    flat = rng.uniform(-3, 3, size=(int(counts.sum()), n_joints))
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    lim = joint_limits(rng.uniform(0.5, 2, n_joints), rng.uniform(1, 5, n_joints))
+    home = rng.uniform(-3, 3, size=n_joints)
+    legs = trapezoid_leg_times(flat, flat, lim)
+    return flat, offsets, legs, trapezoid_leg_times(home, flat, lim)[0], \
+        trapezoid_leg_times(flat, home, lim)[:, 0]
+
+
+def _brute_force(offsets, legs, home_out, home_in) -> float:
+    """Every order x every configuration choice (home -> targets -> home)."""
+    n = len(offsets) - 1
+    perms = np.array(list(itertools.permutations(range(n))))
+    best = math.inf
+    for choice in itertools.product(*[range(offsets[i], offsets[i + 1]) for i in range(n)]):
+        c = np.array(choice)[perms]  # (P, n) flat configuration indices in visiting order
+        cost = home_out[c[:, 0]] + home_in[c[:, -1]] + legs[c[:, :-1], c[:, 1:]].sum(axis=1)
+        best = min(best, float(cost.min()))
+    return best
+
+
+def _run_ga(data, n: int, seed: int) -> np.ndarray:
+    from subtask_opt.base.stop import MaxGenerations, NoImprovement
+    from subtask_opt.ga.config import GAConfig
+    from subtask_opt.ga.kinds import Kind
+    from subtask_opt.ga.loop import run_ga
+    from subtask_opt.ga.permutation import make_aux, neighbour_table
+
+    aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=data.search)
+    out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
+                 criteria=[NoImprovement(30), MaxGenerations(20_000)])
+    return out.genes.astype(np.int64)
+
+
+@pytest.mark.parametrize(("n", "kmax", "seed"), [(5, 3, 0), (6, 3, 1), (7, 2, 2), (7, 3, 3)])
+def test_gtsp_with_home_equals_brute_force(n: int, kmax: int, seed: int) -> None:
+    _, offsets, legs, home_out, home_in = _random_instance(np.random.default_rng(seed), n, kmax)
+    data = pack_layers(legs, offsets, home_out=home_out, home_in=home_in)
+    genes = _run_ga(data, n, seed)
+    configs = np.zeros(n, dtype=np.int64)
+    cost = gc.decode(genes, n, data, configs)
+    assert cost == pytest.approx(_brute_force(offsets, legs, home_out, home_in), rel=1e-12)
+    # the decoded configurations really give that cost
+    c = offsets[genes] + configs[genes]
+    direct = home_out[c[0]] + legs[c[:-1], c[1:]].sum() + home_in[c[-1]]
+    assert cost == pytest.approx(direct, rel=1e-12)
+
+
+def test_decode_is_the_best_choice_for_a_fixed_order() -> None:
+    rng = np.random.default_rng(7)
+    n = 6
+    _, offsets, legs, home_out, home_in = _random_instance(rng, n, 4)
+    data = pack_layers(legs, offsets, home_out=home_out, home_in=home_in)
+    order = rng.permutation(n)
+    configs = np.zeros(n, dtype=np.int64)
+    cost = gc.decode(order.astype(np.int64), n, data, configs)
+    best = math.inf
+    for choice in itertools.product(*[range(offsets[i], offsets[i + 1]) for i in order]):
+        c = np.array(choice)
+        best = min(best, home_out[c[0]] + legs[c[:-1], c[1:]].sum() + home_in[c[-1]])
+    assert cost == pytest.approx(best, rel=1e-12)
+
+
+def test_closed_tour_without_home_equals_brute_force() -> None:
+    rng = np.random.default_rng(11)
+    n = 6
+    _, offsets, legs, _, _ = _random_instance(rng, n, 3)
+    data = pack_layers(legs, offsets)
+    genes = _run_ga(data, n, 0)
+    configs = np.zeros(n, dtype=np.int64)
+    cost = gc.decode(genes, n, data, configs)
+    best = math.inf
+    perms = [(0, *p) for p in itertools.permutations(range(1, n))]
+    for perm in perms:
+        for choice in itertools.product(*[range(offsets[i], offsets[i + 1]) for i in perm]):
+            c = np.array(choice)
+            best = min(best, legs[c, np.roll(c, -1)].sum())
+    assert cost == pytest.approx(best, rel=1e-12)
+
+
+def test_penalised_legs_are_avoided() -> None:
+    rng = np.random.default_rng(5)
+    n = 5
+    _, offsets, legs, home_out, home_in = _random_instance(rng, n, 2)
+    legs = legs.copy()
+    # forbid every leg out of target 0's configurations into target 1's
+    legs[offsets[0]:offsets[1], offsets[1]:offsets[2]] = np.inf
+    data = pack_layers(legs, offsets, home_out=home_out, home_in=home_in)
+    genes = _run_ga(data, n, 1)
+    configs = np.zeros(n, dtype=np.int64)
+    cost = gc.decode(genes, n, data, configs)
+    assert cost == pytest.approx(_brute_force(offsets, legs, home_out, home_in), rel=1e-12)
+    pos = {int(g): k for k, g in enumerate(genes)}
+    assert pos[1] != pos[0] + 1
+
+
+def test_pack_layers_rejects_bad_offsets() -> None:
+    with pytest.raises(InputDataError, match="offsets"):
+        pack_layers(np.zeros((4, 4)), [0, 2, 2, 4])
+    with pytest.raises(ParameterError, match="home_out and home_in"):
+        pack_layers(np.zeros((4, 4)), [0, 2, 4], home_out=np.zeros(4))
+
+
+# ---------------------------------------------------------------- leg times
+
+
+def _straight_line_time(dq: np.ndarray, v: np.ndarray, a: np.ndarray) -> float:
+    """Fastest rest-to-rest straight joint line, by bisection on the duration (an oracle).
+
+    A duration T is feasible when the symmetric trapezoid of the path parameter
+    with the smallest peak speed that covers it in T keeps every joint within its limits.
+    """
+    d = np.abs(dq)
+    if not d.any():
+        return 0.0
+
+    def feasible(t: float) -> bool:
+        # path parameter 0 -> 1 in time t with acceleration phase tau: peak speed s1 and
+        # acceleration s1 / tau, where 1 = s1 (t - tau); pick the largest feasible tau
+        for tau in np.linspace(1e-9, t / 2, 4001):
+            s1 = 1.0 / (t - tau)
+            if np.all(s1 * d <= v * (1 + 1e-12)) and np.all(s1 / tau * d <= a * (1 + 1e-12)):
+                return True
+        return False
+
+    lo, hi = 0.0, 100.0
+    for _ in range(50):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if feasible(mid) else (mid, hi)
+    return hi
+
+
+def test_trapezoid_matrix_matches_a_bisection_oracle() -> None:
+    rng = np.random.default_rng(0)
+    lim = joint_limits([1.0, 0.7, 1.57], [5.0, 4.25, 8.0])
+    qa = rng.uniform(-3, 3, size=(2, 3))
+    qb = np.vstack([rng.uniform(-3, 3, size=(2, 3)), qa[0] + [0.01, -0.02, 0.005]])
+    m = trapezoid_leg_times(qa, qb, lim)
+    assert m.shape == (2, 3)
+    for r in range(2):
+        for c in range(3):
+            oracle = _straight_line_time(qb[c] - qa[r], lim.velocity, lim.acceleration)
+            assert m[r, c] == pytest.approx(oracle, rel=2e-3)
+
+
+def test_trapezoid_equals_ruckig_without_jerk_and_is_below_it_with_jerk() -> None:
+    rng = np.random.default_rng(1)
+    v, a = np.array([1.0, 0.7, 0.7, 1.0, 0.7, 1.57]), np.array([5, 4.25, 4.25, 5.25, 6, 8.0])
+    lim = joint_limits(v, a)
+    for _ in range(10):
+        q0, q1 = rng.uniform(-2, 2, 6), rng.uniform(-2, 2, 6)
+        closed = trapezoid_leg_times(q0, q1, lim)[0, 0]
+        assert ruckig_leg_time(q0, q1, v, a) == pytest.approx(closed, rel=1e-6)
+        assert ruckig_leg_time(q0, q1, v, a, np.full(6, 20.0)) > closed
+
+
+def test_joint_limits_name_the_bad_field() -> None:
+    with pytest.raises(ParameterError, match="JointLimits.acceleration"):
+        joint_limits([1.0, 1.0], [1.0, 0.0])
+    with pytest.raises(ParameterError, match="same length"):
+        joint_limits([1.0, 1.0], [1.0])
