@@ -21,11 +21,12 @@ as the fuzzy navigator's admissibility filter does) and the speed is cut until
 the arc keeps ``radius + safety_margin`` from them (turning in place when no
 speed does). Neither escapes local minima.
 
-Sensor noise: both read every echo ``noise_sigmas`` standard deviations of the
-ring's noise closer than measured (:func:`pessimistic_ranges`) before deciding,
-so a reading that came out too long by up to that much cannot talk the guard
-into a move that the true wall forbids (a 0.02 m noise once let VFF drive into
-an obstacle it had just measured 5 cm too far).
+Sensor noise: the guard reads every echo ``noise_sigmas`` standard deviations
+of the ring's noise closer than measured (:func:`pessimistic_ranges`), so a
+reading that came out too long by up to that much cannot talk it into a move
+the true wall forbids (with 0.02 m noise VFF once drove into an obstacle it had
+just measured 5 cm too far, in ``random-146409670``). The steering and the
+speed law use the readings as measured.
 
 The parameter classes are :class:`SonarVFFParams` and :class:`SonarVFHParams`
 (the grid family's :mod:`subtask_opt.planners.grid.vff` has its own ``VFFParams``).
@@ -100,8 +101,8 @@ class SonarVFFParams:
         repulsion: gain of the push of an echo at distance r, ``repulsion / r**2`` (>= 0).
         safety_margin: clearance beyond the body radius at which the robot stops.
         slow_distance: distance over which the speed ramps up from 0 (> 0).
-        noise_sigmas: echoes are read this many noise standard deviations closer
-            than measured (in ``[0, MAX_NOISE_SIGMAS]``; :func:`pessimistic_ranges`).
+        noise_sigmas: the guard reads echoes this many noise standard deviations
+            closer than measured (in ``[0, MAX_NOISE_SIGMAS]``; :func:`pessimistic_ranges`).
     """
 
     attraction: float = 1.0
@@ -161,8 +162,8 @@ class SonarVFHParams:
         safety_margin: enlargement of each echo beyond the body radius (>= 0);
             also the stopping clearance of the speed law.
         slow_distance: distance over which the speed ramps up from 0 (> 0).
-        noise_sigmas: echoes are read this many noise standard deviations closer
-            than measured (in ``[0, MAX_NOISE_SIGMAS]``; :func:`pessimistic_ranges`).
+        noise_sigmas: the guard reads echoes this many noise standard deviations
+            closer than measured (in ``[0, MAX_NOISE_SIGMAS]``; :func:`pessimistic_ranges`).
     """
 
     threshold_distance: float = 1.0
