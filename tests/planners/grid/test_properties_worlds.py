@@ -23,6 +23,7 @@ overall when the goal is unreachable; the ``fuzz`` variant runs 2,000 fresh grid
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
@@ -32,6 +33,7 @@ from scipy import ndimage
 from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.planners.base import planners
 from subtask_opt.planners.grid.world import GridWorld
+from tests.fuzz_report import Timer
 from tests.planners.grid.test_grid_oracles import path_violations
 
 GRID = planners("grid")
@@ -64,34 +66,40 @@ def reachable(occ: np.ndarray, start, goal) -> bool:
     return bool(labels[start[1], start[0]] == labels[goal[1], goal[0]])
 
 
-def _check_grids(seeds: np.ndarray, ga_unreachable_every: int = 1) -> dict[str, int]:
-    """Every planner on one grid per seed; the successes per planner."""
+def _check_grids(seeds: np.ndarray, ga_unreachable_every: int = 1,
+                 report: str = "") -> dict[str, int]:
+    """Every planner on one grid per seed; the successes per planner. With ``report``
+    (a test id) each grid counts as one input of a fuzz run."""
     successes = dict.fromkeys(GRID, 0)
-    skipped = 0
     for n, seed in enumerate(seeds):
-        occ, start, goal = random_grid(np.random.default_rng(int(seed)))
-        world = GridWorld(occ)
-        ok = reachable(occ, start, goal)
-        for name, info in GRID.items():
-            if name == "ga" and not ok and n % ga_unreachable_every:
-                skipped += 1
-                continue
-            kwargs: dict = ({"seed": int(seed), "stop": MaxGenerations(10)}
-                            if info.stochastic else {})
-            res = info.plan(world, start, goal, **kwargs)
-            where = (int(seed), name, occ.astype(int).tolist(), start, goal)
-            assert res.success <= ok, where
-            if name in EXACT:
-                assert res.success == ok, where
-            if res.success:
-                successes[name] += 1
-                assert np.allclose(res.path[0], start) and np.allclose(res.path[-1], goal), where
-                assert path_violations(occ, res.path) == [], (where, res.path.tolist())
-            if "trajectory" in res.info:
-                driven = np.asarray(res.info["trajectory"])
-                clean = driven if res.outcome != "collision" else driven[:-1]
-                assert path_violations(occ, clean) == [], (where, "trajectory")
+        with Timer(report) if report else contextlib.nullcontext():
+            _check_grid(int(seed), n % ga_unreachable_every == 0, successes)
     return successes
+
+
+def _check_grid(seed: int, run_ga_if_unreachable: bool, successes: dict[str, int]) -> None:
+    """One grid: every planner against the oracles (GA on an unreachable goal only if asked)."""
+    occ, start, goal = random_grid(np.random.default_rng(int(seed)))
+    world = GridWorld(occ)
+    ok = reachable(occ, start, goal)
+    for name, info in GRID.items():
+        if name == "ga" and not ok and not run_ga_if_unreachable:
+            continue
+        kwargs: dict = ({"seed": int(seed), "stop": MaxGenerations(10)}
+                        if info.stochastic else {})
+        res = info.plan(world, start, goal, **kwargs)
+        where = (int(seed), name, occ.astype(int).tolist(), start, goal)
+        assert res.success <= ok, where
+        if name in EXACT:
+            assert res.success == ok, where
+        if res.success:
+            successes[name] += 1
+            assert np.allclose(res.path[0], start) and np.allclose(res.path[-1], goal), where
+            assert path_violations(occ, res.path) == [], (where, res.path.tolist())
+        if "trajectory" in res.info:
+            driven = np.asarray(res.info["trajectory"])
+            clean = driven if res.outcome != "collision" else driven[:-1]
+            assert path_violations(occ, clean) == [], (where, "trajectory")
 
 
 def test_the_exact_planners_are_registered():
@@ -114,7 +122,7 @@ def test_every_planner_on_random_grids():
 
 
 @pytest.mark.fuzz
-def test_fuzz_every_planner_on_2000_random_grids():
+def test_fuzz_every_planner_on_2000_random_grids(request):
     seeds = np.random.default_rng().integers(0, 2**63 - 1, FUZZ_WORLDS)
-    successes = _check_grids(seeds, FUZZ_GA_UNREACHABLE_EVERY)
+    successes = _check_grids(seeds, FUZZ_GA_UNREACHABLE_EVERY, request.node.nodeid)
     assert min(successes.values()) > 0, successes

@@ -18,6 +18,7 @@ the ``fuzz`` variant runs 2,000 (``FUZZ_WORLDS``) with fresh seeds.
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 import numpy as np
@@ -28,6 +29,7 @@ from shapely.ops import unary_union
 from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.planners.base import planners
 from subtask_opt.planners.polygon.world import PolygonWorld, convex_hull
+from tests.fuzz_report import Timer
 
 POLYGON = planners("polygon")
 SIDE = 100.0
@@ -111,29 +113,36 @@ class Oracle:
         return out
 
 
-def _check_worlds(seeds: np.ndarray) -> dict[str, int]:
-    """Run every planner on one world per seed; return the successes per planner."""
+def _check_worlds(seeds: np.ndarray, report: str = "") -> dict[str, int]:
+    """Every planner on one world per seed; the successes per planner. With ``report``
+    (a test id) each world counts as one input of a fuzz run."""
     successes = dict.fromkeys(POLYGON, 0)
     for seed in seeds:
-        rng = np.random.default_rng(int(seed))
-        world = random_world(rng)
-        start, goal = _free_point(rng, world), _free_point(rng, world)
-        oracle = Oracle(world)
-        same = oracle.piece(start) == oracle.piece(goal)
-        for name, info in POLYGON.items():
-            kwargs: dict = {}
-            if info.stochastic:
-                kwargs["seed"] = int(seed)
-            if info.iterative:
-                kwargs["stop"] = MaxGenerations(20)
-            res = info.plan(world, start, goal, **kwargs)
-            assert res.success == same, (int(seed), name, res.message)
-            if res.success:
-                successes[name] += 1
-                assert np.allclose(res.path[0], start) and np.allclose(res.path[-1], goal)
-                bad = oracle.violations(res.path, start, goal)
-                assert bad == [], (int(seed), name, bad)
+        with Timer(report) if report else contextlib.nullcontext():
+            _check_world(int(seed), successes)
     return successes
+
+
+def _check_world(seed: int, successes: dict[str, int]) -> None:
+    """One world: every planner against the shapely oracle."""
+    rng = np.random.default_rng(int(seed))
+    world = random_world(rng)
+    start, goal = _free_point(rng, world), _free_point(rng, world)
+    oracle = Oracle(world)
+    same = oracle.piece(start) == oracle.piece(goal)
+    for name, info in POLYGON.items():
+        kwargs: dict = {}
+        if info.stochastic:
+            kwargs["seed"] = int(seed)
+        if info.iterative:
+            kwargs["stop"] = MaxGenerations(20)
+        res = info.plan(world, start, goal, **kwargs)
+        assert res.success == same, (int(seed), name, res.message)
+        if res.success:
+            successes[name] += 1
+            assert np.allclose(res.path[0], start) and np.allclose(res.path[-1], goal)
+            bad = oracle.violations(res.path, start, goal)
+            assert bad == [], (int(seed), name, bad)
 
 
 def test_oracle_sees_the_closed_corner_and_a_crossing():
@@ -166,7 +175,7 @@ def test_every_planner_on_random_worlds():
 
 
 @pytest.mark.fuzz
-def test_fuzz_every_planner_on_2000_random_worlds():
+def test_fuzz_every_planner_on_2000_random_worlds(request):
     seeds = np.random.default_rng().integers(0, 2**63 - 1, FUZZ_WORLDS)
-    successes = _check_worlds(seeds)
+    successes = _check_worlds(seeds, request.node.nodeid)
     assert min(successes.values()) > FUZZ_WORLDS // 2, successes
