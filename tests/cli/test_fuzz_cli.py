@@ -151,27 +151,29 @@ def _run(case: Case, value: str, files: dict[str, str]) -> None:
     assert not any("Traceback" in ln for ln in lines), (argv, lines)
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
-def test_cli_numeric_options(case, files):
-    @settings(max_examples=QUICK, deadline=None, derandomize=True, database=None,
-              suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
-    @given(value=_VALUES[case.kind])
-    def check(value):
+def _fuzz(case: Case, files: dict[str, str], examples: int, *, derandomize: bool) -> None:
+    """``examples`` hypothesis values for ``case``; the property is named after the case
+    (so a fuzz run's report counts each option apart)."""
+
+    def check(value: str) -> None:
         _run(case, value, files)
 
-    check()
+    check.__name__ = check.__qualname__ = "cli_" + case.id.replace("-", "_").strip("_")
+    settings(max_examples=examples, deadline=None, derandomize=derandomize,
+             database=None if derandomize else settings.default.database,
+             suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])(
+        given(value=_VALUES[case.kind])(check))()
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_cli_numeric_options(case, files):
+    _fuzz(case, files, QUICK, derandomize=True)
 
 
 @pytest.mark.fuzz
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
 def test_fuzz_cli_numeric_options(case, files):
-    @settings(max_examples=FUZZ_CLI, deadline=None,
-              suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
-    @given(value=_VALUES[case.kind])
-    def check(value):
-        _run(case, value, files)
-
-    check()
+    _fuzz(case, files, FUZZ_CLI, derandomize=False)
 
 
 def test_every_case_names_an_option_its_command_has():
