@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 from dataclasses import dataclass
 
 import pytest
@@ -60,7 +61,8 @@ class Case:
 
     @property
     def id(self) -> str:
-        return "-".join([a for a in self.base[:2] if not a.startswith("-")][:2]) + self.option
+        words = self.base[:2] if self.base[0] in ("plan", "bench") else self.base[:1]
+        return "-".join(words) + self.option
 
 
 SOLVE = ("solve", "--case", "square20", "--no-progress", "--quiet", "--max-generations", "3",
@@ -158,7 +160,7 @@ def _fuzz(case: Case, files: dict[str, str], examples: int, *, derandomize: bool
     def check(value: str) -> None:
         _run(case, value, files)
 
-    check.__name__ = check.__qualname__ = "cli_" + case.id.replace("-", "_").strip("_")
+    check.__name__ = check.__qualname__ = "cli_" + re.sub(r"\W", "_", case.id)
     settings(max_examples=examples, deadline=None, derandomize=derandomize,
              database=None if derandomize else settings.default.database,
              suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])(
