@@ -64,8 +64,12 @@ coverage: $(VENV)/.installed-dev
 	NUMBA_DISABLE_JIT=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --cov=subtask_opt \
 		--cov-report=term:skip-covered tests
 
+# make fuzz: every test marked fuzz with FUZZ_EXAMPLES examples each (readers x5/x10, CLI
+# options /10), 2,000 random grids and polygon worlds; prints and writes the input counts,
+# the slowest input (limit 10 s, FUZZ_TIME_LIMIT_S) and the peak memory to out/fuzz/report.json
 fuzz: $(VENV)/.installed-dev
-	FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 -m fuzz tests
+	FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) FUZZ_REPORT=$(OUT)/fuzz/report.json MPLBACKEND=Agg \
+		$(BIN)/python -m pytest -n 2 -m fuzz tests
 
 clean:
 	-[ -x $(BIN)/python ] && $(BIN)/python -m subtask_opt._kernel_cache --clear

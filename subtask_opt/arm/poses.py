@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
+from subtask_opt.base.files import MAX_JSON_DEPTH, json_depth
 
 AXIS_COLUMNS: tuple[str, ...] = ("x", "y", "z", "dx", "dy", "dz")
 POSE_COLUMNS: tuple[str, ...] = ("x", "y", "z", "qx", "qy", "qz", "qw")
@@ -225,6 +226,10 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
 
 
 def _parse_json(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
+    depth = json_depth(text)  # checked before parsing: no RecursionError
+    if depth > MAX_JSON_DEPTH:
+        raise InputDataError(f"target file {path}: brackets nested {depth} deep, deeper than "
+                             f"the limit of {MAX_JSON_DEPTH}")
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:

@@ -33,7 +33,6 @@ than ``clearance`` (the bound is tested).
 
 from __future__ import annotations
 
-import json
 import math
 import threading
 from dataclasses import dataclass
@@ -44,6 +43,7 @@ import numpy as np
 
 from subtask_opt.arm.serial import SerialArm
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
+from subtask_opt.base.files import parse_json
 
 MAX_SCENE_BYTES = 8 * 1024 * 1024
 _ROT_TOL = 1e-6
@@ -175,11 +175,7 @@ class Scene:
             text = path.read_text(encoding="utf-8-sig")
         except (OSError, UnicodeDecodeError) as exc:
             raise InputDataError(f"cannot read scene file {path}: {exc}") from None
-        try:
-            doc = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InputDataError(f"scene file {path} is not valid JSON (line {exc.lineno}: "
-                                 f"{exc.msg})") from None
+        doc = parse_json(text, f"scene file {path}")  # depth-limited: no RecursionError
         return cls.from_dict(doc, source=f"scene file {path.name}")
 
     def for_arm(self, arm: SerialArm, **kwargs: Any) -> CollisionChecker:

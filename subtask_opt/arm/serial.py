@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import importlib.metadata
 import importlib.resources
-import json
 import math
 import threading
 import xml.etree.ElementTree as ET
@@ -42,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.base.files import parse_json
 
 SERIAL_ROBOT_NAMES: tuple[str, ...] = ("ur3", "ur5", "ur10", "panda", "vs060_drill")
 
@@ -315,12 +315,10 @@ def _check_urdf_limits(urdf: Path, locked: Mapping[str, float]) -> None:
 
 def _read_json(path: Path) -> dict[str, Any]:
     try:
-        params = json.loads(path.read_text(encoding="utf-8-sig"))
+        text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputDataError(f"cannot read robot parameter file {path}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise InputDataError(f"robot parameter file {path} is not valid JSON "
-                             f"(line {exc.lineno}: {exc.msg})") from None
+    params = parse_json(text, f"robot parameter file {path}")  # depth-limited
     if not isinstance(params, dict):
         raise InputDataError(f"robot parameter file {path} must hold a JSON object")
     return params

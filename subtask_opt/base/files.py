@@ -106,26 +106,28 @@ def _checked_int(text: str) -> int:
 @contextmanager
 def quiet_stderr() -> Iterator[None]:
     """Silence what C++ libraries write to stderr (their own error lines)."""
-    with _quiet(sys.stderr):
+    with _quiet(sys.stderr, 2):
         yield
 
 
 @contextmanager
 def quiet_stdout() -> Iterator[None]:
     """Silence what C++ libraries write to stdout (solver banners)."""
-    with _quiet(sys.stdout):
+    with _quiet(sys.stdout, 1):
         yield
 
 
 @contextmanager
-def _quiet(stream: Any) -> Iterator[None]:
+def _quiet(stream: Any, fd: int) -> Iterator[None]:
+    """Point the process's file descriptor ``fd`` (where C++ code writes, whatever
+    ``sys.stderr``/``sys.stdout`` have been replaced by) at /dev/null for the block."""
     try:
-        fd = stream.fileno()
-    except (AttributeError, OSError, ValueError):  # no real file (captured): nothing to do
+        if stream is not None:
+            stream.flush()
+        saved = os.dup(fd)
+    except (AttributeError, OSError, ValueError):  # no such descriptor: nothing to silence
         yield
         return
-    stream.flush()
-    saved = os.dup(fd)
     try:
         with open(os.devnull, "w") as devnull:
             os.dup2(devnull.fileno(), fd)

@@ -11,10 +11,16 @@ whatever the chunking, and a seeded run is reproducible.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-from subtask_opt.base.errors import ParameterError, require_int, require_positive
+from subtask_opt.base.errors import (
+    ParameterError,
+    require_int,
+    require_non_negative,
+    require_positive,
+)
 
 
 @dataclass(frozen=True)
@@ -95,10 +101,10 @@ class TargetCost:
     tolerance: float = 1e-9
 
     def __post_init__(self) -> None:
-        if not math.isfinite(self.cost):
-            raise ParameterError(f"TargetCost.cost must be finite, got {self.cost!r}")
-        if not math.isfinite(self.tolerance) or self.tolerance < 0:
-            raise ParameterError(f"TargetCost.tolerance must be >= 0, got {self.tolerance!r}")
+        if (isinstance(self.cost, bool) or not isinstance(self.cost, numbers.Real)
+                or not math.isfinite(self.cost)):
+            raise ParameterError(f"TargetCost.cost must be a finite number, got {self.cost!r}")
+        require_non_negative("TargetCost", "tolerance", self.tolerance)
 
     @property
     def threshold(self) -> float:

@@ -43,7 +43,8 @@ from subtask_opt.base.errors import (
     require_int,
     require_positive,
 )
-from subtask_opt.planners.polygon.world import PolygonWorld
+from subtask_opt.base.files import parse_json, read_text
+from subtask_opt.planners.polygon.world import MAX_FILE_BYTES, MAX_JSON_DEPTH, PolygonWorld
 
 MAX_SUITE = 1_000_000
 """Most scenarios a random suite may hold."""
@@ -101,13 +102,9 @@ class Scenario:
 
     @classmethod
     def from_json(cls, path: str | Path) -> Scenario:
-        """Read a scenario file (OSError if unreadable, InputDataError if malformed)."""
+        """Read a scenario file (InputDataError if missing, unreadable, too large or malformed)."""
         path = Path(path)
-        text = path.read_text(encoding="utf-8", errors="replace")
-        try:
-            d = json.loads(text)
-        except (json.JSONDecodeError, RecursionError) as exc:
-            raise InputDataError(f"{path}: not valid JSON ({exc})") from None
+        d = _read_json(path)
         try:
             sc = cls.from_dict(d)
         except InputDataError as exc:
@@ -262,6 +259,14 @@ def random_navigation_suite(n: int, seed: int,
     return [random_navigation_scenario(int(ss.generate_state(1)[0]), params) for ss in seeds]
 
 
+def _read_json(path: Path) -> Any:
+    """A world or scenario file's JSON: UTF-8, at most the world reader's
+    ``MAX_FILE_BYTES``, nested at most one level deeper than a world (a
+    scenario wraps one), numbers finite; refused before parsing otherwise."""
+    text = read_text(path, "scenario file", max_bytes=MAX_FILE_BYTES)
+    return parse_json(text, str(path), max_depth=MAX_JSON_DEPTH + 1)
+
+
 def resolve_world(text: str) -> tuple[PolygonWorld, Scenario | None]:
     """A world by name or path: a paper scenario, a built-in world, or a JSON file
     holding a world or a scenario.
@@ -276,10 +281,7 @@ def resolve_world(text: str) -> tuple[PolygonWorld, Scenario | None]:
         return PolygonWorld.builtin(text), None
     if text.endswith(".json") or Path(text).exists():
         path = Path(text)
-        try:
-            d = json.loads(path.read_text(encoding="utf-8", errors="replace"))
-        except (json.JSONDecodeError, RecursionError) as exc:
-            raise InputDataError(f"{path}: not valid JSON ({exc})") from None
+        d = _read_json(path)
         try:
             if isinstance(d, dict) and "world" in d:
                 sc = Scenario.from_dict(d)
