@@ -597,7 +597,8 @@ def _with_home(problem: SequencingProblem, home: tuple[float, float]) -> Sequenc
     try:
         problem.arm.check_reachable(xy.reshape(1, 2))
     except UnreachableError as exc:
-        why = str(exc).split(" ", 4)[-1] if str(exc).startswith("subtask 0 at") else str(exc)
+        text = str(exc)
+        why = text.partition(") ")[2] if text.startswith("subtask 0 at") else text
         raise InputDataError(f"home point ({xy[0]:.6g}, {xy[1]:.6g}) is unreachable: {why}") \
             from None
     pts = problem.subtasks.points

@@ -62,7 +62,19 @@ def register(root: argparse._SubParsersAction) -> None:
                    help="line model: drive an infeasible straight line as a joint move "
                         "(default) or forbid it")
     p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
-                   help="index of the subtask the tour starts and ends at")
+                   help="index of the subtask the tour (or open path) starts at")
+    shape = p.add_argument_group("tour shape and constraints")
+    shape.add_argument("--tour", choices=("closed", "open"), default="closed",
+                       help="closed: return to the start (default); open: a path that does "
+                            "not come back")
+    shape.add_argument("--end", type=non_negative_int, default=None, metavar="I",
+                       help="(--tour open) the subtask the path ends at (default: free)")
+    shape.add_argument("--home", type=floats, default=None, metavar="X,Y",
+                       help="a home point (m) visited first and last, not a subtask; the arm "
+                            "must reach it")
+    shape.add_argument("--precedence", default=None, metavar="FILE",
+                       help="text file of lines 'a,b': subtask a before subtask b (0-based "
+                            "row indices, as in the printed order)")
     p.add_argument("--preset", default="default", choices=PRESETS,
                    help="solver preset (default: micro-GA with local search)")
     p.add_argument("--seed", type=seed, default=0, help="solver seed in [0, 2**63) (default 0)")
@@ -96,8 +108,9 @@ def run(args: argparse.Namespace) -> int:
     from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
     from subtask_opt.arm.tasks import CASE_NAMES, builtin_case, load_subtasks
 
-    refuse_overwriting_inputs([args.case, args.robot],
+    refuse_overwriting_inputs([args.case, args.robot, args.precedence],
                               [args.json, args.plot, args.trajectory, args.animate])
+    constraints = _constraints(args)
     arm = load_arm(args.robot)
     if args.vmax or args.amax or args.jmax:
         arm = arm.with_joint_limits(velocity=args.vmax, acceleration=args.amax, jerk=args.jmax)
@@ -119,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
         stop = stop + params.default_stop(len(subtasks))
     result = solve(problem, seed=args.seed, stop=stop, params=params,
                    progress=not args.no_progress, certify=args.certify,
-                   certify_time_limit=args.certify_time_limit)
+                   certify_time_limit=args.certify_time_limit, constraints=constraints)
     report = result.report
     assert report is not None
     print(result.summary())
@@ -157,6 +170,26 @@ def run(args: argparse.Namespace) -> int:
     if executed is not None:
         _write_trajectory(args, problem, executed[0])
     return EXIT_OK
+
+
+def _constraints(args: argparse.Namespace) -> Any:
+    """The ``TourConstraints`` of the shape options (an unsupported output: one error line)."""
+    from subtask_opt.arm.constraints import TourConstraints, read_precedence
+    from subtask_opt.base.errors import ParameterError
+
+    if args.home is not None and len(args.home) != 2:
+        raise ParameterError(f"--home takes a point X,Y, got {len(args.home)} numbers")
+    pairs = read_precedence(args.precedence) if args.precedence else ()
+    constraints = TourConstraints(tour=args.tour, end=args.end,
+                                  home=None if args.home is None else tuple(args.home),
+                                  precedence=pairs)
+    if args.tour == "open" or args.home is not None:
+        wanted = [flag for flag, value in (("--plot", args.plot), ("--trajectory",
+                  args.trajectory), ("--animate", args.animate)) if value]
+        if wanted:
+            raise ParameterError(f"{', '.join(wanted)} draw closed tours over the subtasks; "
+                                 "not available with --tour open or --home yet")
+    return constraints
 
 
 def _executed(args: argparse.Namespace, problem: Any, result: Any) -> Any:
