@@ -483,6 +483,9 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         # cheapest-configuration times when the configurations are decoded afterwards
         data = np.ascontiguousarray(data[:, :n])
         kind = Kind.PINNED_PERMUTATION
+        if stop is None and not paper:
+            # precedence makes local optima deeper (fewer moves are feasible): a longer stall
+            criteria = [NoImprovement(max(PINNED_STALL, n // 2)), MaxGenerations(50_000)]
     bound = None
     if n <= params.bound_max_nodes:
         # every leg costs at least data[:, :n] (the cheapest configuration pair), so a
@@ -645,6 +648,10 @@ def _rotate(tour: np.ndarray, first: int) -> np.ndarray:
     start = int(np.flatnonzero(tour == first)[0])
     return np.roll(np.asarray(tour, dtype=np.int64), -start)
 
+
+PINNED_STALL = 60
+"""Default stall (generations without improvement) of searches with precedence or a
+fixed end; 15 missed the optimum of 1 in 200 random small constrained instances."""
 
 MAX_LEG_TIME = 1e9
 """The largest finite travel time a matrix may hold (sums of N of them stay exact enough)."""

@@ -13,9 +13,9 @@ infeasible tour (:func:`tour_cost` still returns ``inf`` for one, as a guard):
   order taking, among the available nodes, the one earliest in the perturbed
   tour, which keeps the relative order wherever the constraints allow;
 * the local search moves only where the constraints allow: Or-opt (a run of
-  1-3 nodes moved forward no further than its first successor, backward no
+  1 to :data:`MAX_SEGMENT` nodes moved forward no further than its first successor, backward no
   further than its last predecessor) and 2-opt (a reversed run may hold no
-  constrained pair), with exact asymmetric costs (reversals priced with
+  constrained pair) and exchanges of two nodes, with exact asymmetric costs (reversals priced with
   prefix sums of both directions).
 
 ``data`` is the (N, N) cost matrix (asymmetric allowed; the return leg to the
@@ -36,6 +36,9 @@ from subtask_opt.ga.dispatch import OperatorSet, register
 from subtask_opt.ga.kinds import Kind
 
 _HEADER = 4  # n, first, last, number of pairs
+MAX_SEGMENT = 8
+"""The longest run of nodes Or-opt moves (segment moves of this length cover the
+orientation-keeping 3-opt moves that matter on asymmetric costs)."""
 
 
 class PinnedAux(NamedTuple):
@@ -216,7 +219,7 @@ def randomize(genes, data, aux, rng, best, best_len):
     n = data.shape[0]
     out = genes[:n]
     empty = np.empty(0, dtype=np.int64)
-    if best_len > 0 and rng.random() < 0.5:
+    if best_len > 0 and rng.random() < 0.34:
         out[:] = best[:n]
         hi = n - 1 if a.last < 0 else n - 2  # last movable position
         movable = hi  # positions 1..hi
@@ -242,7 +245,7 @@ def randomize(genes, data, aux, rng, best, best_len):
             priority[out[q]] = q
         _build(out, data, a, rng, _REPAIR, empty, empty, priority)
         return n
-    mode = _GREEDY if rng.random() < 0.5 else _RANDOM
+    mode = _GREEDY if rng.random() < 0.34 else _RANDOM
     _build(out, data, a, rng, mode, empty, empty, empty)
     return n
 
@@ -316,11 +319,11 @@ def _two_opt(t, data, a, pos, fw, bw):
 
 @njit(cache=True)
 def _or_opt(t, data, a, pos, tmp):
-    """One pass of feasible segment moves (1-3 nodes, kept in order); True if any applied."""
+    """One pass of feasible segment moves (kept in order); True if any was applied."""
     n = t.shape[0]
     hi = n - 1 if a.last < 0 else n - 2
     changed = False
-    for length in range(1, 4):
+    for length in range(1, min(MAX_SEGMENT, hi) + 1):
         i = 1
         while i + length - 1 <= hi:
             e = i + length - 1
@@ -394,8 +397,50 @@ def _or_opt(t, data, a, pos, tmp):
 
 
 @njit(cache=True)
+def _swap(t, data, a, pos):
+    """One pass of feasible exchanges of two nodes; True if any was applied."""
+    n = t.shape[0]
+    hi = n - 1 if a.last < 0 else n - 2
+    changed = False
+    for i in range(1, hi):
+        x = t[i]
+        jmax = hi  # x may not pass its first successor
+        for q in range(a.succ_ptr[x], a.succ_ptr[x + 1]):
+            p = pos[a.succ_idx[q]]
+            if p > i and p < jmax + 1:
+                jmax = p - 1
+        for j in range(i + 1, jmax + 1):
+            y = t[j]
+            blocked = False
+            for q in range(a.pred_ptr[y], a.pred_ptr[y + 1]):
+                if pos[a.pred_idx[q]] >= i:
+                    blocked = True
+                    break
+            if blocked:
+                continue
+            p = t[i - 1]
+            nq = t[(j + 1) % n]
+            if j == i + 1:
+                old = data[p, x] + data[x, y] + data[y, nq]
+                new = data[p, y] + data[y, x] + data[x, nq]
+            else:
+                u = t[i + 1]
+                b = t[j - 1]
+                old = data[p, x] + data[x, u] + data[b, y] + data[y, nq]
+                new = data[p, y] + data[y, u] + data[b, x] + data[x, nq]
+            if _better(new, old):
+                t[i] = y
+                t[j] = x
+                pos[y] = i
+                pos[x] = j
+                changed = True
+                break
+    return changed
+
+
+@njit(cache=True)
 def local_search(genes, length, data, aux):
-    """2-opt and Or-opt under the pins and the pairs until neither improves."""
+    """2-opt, Or-opt and node exchanges under the pins and the pairs until none improves."""
     a = unpack(aux)
     t = genes[:length]
     n = length
@@ -409,6 +454,7 @@ def local_search(genes, length, data, aux):
         _prefix(t, data, fw, bw)
         moved = _two_opt(t, data, a, pos, fw, bw)
         moved = _or_opt(t, data, a, pos, tmp) or moved
+        moved = _swap(t, data, a, pos) or moved
         if not moved:
             break
     return length
