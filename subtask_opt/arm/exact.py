@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -187,7 +188,7 @@ HELD_KARP_PINNED_MAX = 13
 
 
 def _pinned_inputs(matrix: np.ndarray, first: int, last: int,
-                   pairs: np.ndarray | list[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray]:
+                   pairs: np.ndarray | Sequence[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray]:
     m = _square_matrix(matrix)
     n = m.shape[0]
     p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
@@ -200,7 +201,8 @@ def _pinned_inputs(matrix: np.ndarray, first: int, last: int,
 
 
 def held_karp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
-                     pairs: np.ndarray | list[tuple[int, int]] = ()) -> tuple[float, np.ndarray]:
+                     pairs: np.ndarray | Sequence[tuple[int, int]] = (),
+                     ) -> tuple[float, np.ndarray]:
     """Exact minimum closed tour from ``first`` (ending at ``last`` if >= 0) keeping the pairs.
 
     Dynamic programming over (set of visited nodes, last node): a node may join
@@ -264,7 +266,7 @@ def held_karp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
 
 
 def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
-                pairs: np.ndarray | list[tuple[int, int]] = (), *,
+                pairs: np.ndarray | Sequence[tuple[int, int]] = (), *,
                 time_limit: float | None = None) -> tuple[float, np.ndarray]:
     """Certified minimum closed tour from ``first`` (to ``last``) keeping the pairs, by MILP.
 

@@ -47,7 +47,6 @@ from subtask_opt.base.stop import (
 from subtask_opt.ga.config import GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import run_ga
-from subtask_opt.ga.precedence import make_pinned_aux
 from subtask_opt.ga.permutation import (
     SEARCH_EXACT,
     SEARCH_FAST,
@@ -55,6 +54,7 @@ from subtask_opt.ga.permutation import (
     make_aux,
     neighbour_table,
 )
+from subtask_opt.ga.precedence import make_pinned_aux
 
 if TYPE_CHECKING:
     from subtask_opt.arm.model import Arm
@@ -458,6 +458,7 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         assert isinstance(problem, SequencingProblem)
         from subtask_opt.arm.configurations import pack_data
 
+        assert problem.timing.branch_times is not None
         if canon.open_path:
             tensor = transform_tensor(problem.timing.branch_times, canon)
             data = pack_data(tensor)[0]
@@ -538,13 +539,13 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         raise SubtaskOptError(f"internal error: the answer breaks its constraints: {broken}")
     if isinstance(problem, SequencingProblem):
         report = tour_report(problem, tour, configs, cyclic)
-    total = float(np.sum(legs))
+    total_time = float(np.sum(legs))
     certified = None
     if certify:
-        certified = _certify(problem, canon, total, certify_time_limit)
+        certified = _certify(problem, canon, total_time, certify_time_limit)
     return Result(
         order=canon.user_order(tour),
-        total_time=total,
+        total_time=total_time,
         leg_times=legs,
         matrix=matrix,
         generations=outcome.generations,
