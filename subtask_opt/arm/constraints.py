@@ -362,3 +362,31 @@ def transform_tensor(tensor: np.ndarray, canon: Canonical) -> np.ndarray:
         else:
             t[:, :, canon.first, :] = 0.0
     return t
+
+
+def symmetric_path_matrix(costs: np.ndarray, start: int, end: int | None,
+                          ) -> tuple[np.ndarray, float]:
+    """An open path over symmetric ``costs`` as a symmetric closed tour: ``(matrix, offset)``.
+
+    One dummy node D (the last row) joins the path's ends: ``D - start`` costs 0,
+    ``D - end`` costs 0 for a fixed end and ``K`` for a free one, every other edge
+    at D costs ``K``, where ``K`` exceeds the cost of a feasible path. A tour that
+    does not enter D from the path's ends pays at least one ``K`` more than one
+    that does, so the shortest tour is the shortest path plus ``offset`` (``K``
+    for a free end, 0 for a fixed one). This keeps the strong symmetric
+    Held-Karp bound and the subtour-cut MILP for open paths (the zero-cost
+    return of :func:`canonical` makes the costs asymmetric).
+    """
+    c = np.asarray(costs, dtype=float)
+    n = c.shape[0]
+    order = [start] + [v for v in range(n) if v not in (start, end)]
+    if end is not None:
+        order.append(end)
+    k = float(np.sum(c[order[:-1], order[1:]])) + 1.0
+    m = np.full((n + 1, n + 1), k)
+    m[:n, :n] = c
+    m[n, n] = 0.0
+    m[n, start] = m[start, n] = 0.0
+    if end is not None:
+        m[n, end] = m[end, n] = 0.0
+    return m, (0.0 if end is not None else k)

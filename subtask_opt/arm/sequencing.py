@@ -24,7 +24,13 @@ from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
 from subtask_opt.arm.bound import lower_bound
 from subtask_opt.arm.configurations import penalty_for
-from subtask_opt.arm.constraints import Canonical, TourConstraints, canonical, transform_tensor
+from subtask_opt.arm.constraints import (
+    Canonical,
+    TourConstraints,
+    canonical,
+    symmetric_path_matrix,
+    transform_tensor,
+)
 from subtask_opt.arm.report import TourReport, tour_report
 from subtask_opt.base.errors import (
     InputDataError,
@@ -491,7 +497,7 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     if n <= params.bound_max_nodes:
         # every leg costs at least data[:, :n] (the cheapest configuration pair), so a
         # bound of that matrix bounds the tour; a tour that meets it is proven optimal
-        bound = lower_bound(data[:, :n], seed=0)
+        bound = _relaxation_bound(problem, canon, data[:, :n])
         if stop is None:
             criteria = [*criteria, TargetCost(bound * (1 + 1e-12) + 1e-12)]
     if kind == Kind.PINNED_PERMUTATION:
@@ -562,6 +568,28 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     )
 
 
+def _relaxation_bound(problem: SequencingProblem | MatrixProblem, canon: Canonical,
+                      costs: np.ndarray) -> float:
+    """A lower bound of the constrained problem: a bound of a relaxation without precedence.
+
+    ``costs`` are the canonical costs the GA sees. An open path over symmetric
+    costs is bounded through :func:`~subtask_opt.arm.constraints.symmetric_path_matrix`
+    (far tighter than the asymmetric bound of its zero-cost return); everything
+    else by the bound of ``costs``.
+    """
+    if canon.open_path and problem.symmetric:
+        base = np.array(costs, dtype=float)
+        if canon.last >= 0:
+            base[canon.last, canon.first] = base[canon.first, canon.last]
+        else:
+            base[:, canon.first] = base[canon.first, :]
+        if np.allclose(base, base.T, rtol=1e-12, atol=0.0):
+            m, offset = symmetric_path_matrix(base, canon.first,
+                                              None if canon.last < 0 else canon.last)
+            return max(0.0, lower_bound(m, seed=0) - offset)
+    return lower_bound(costs, seed=0)
+
+
 def _shaped(problem: SequencingProblem | MatrixProblem, constraints: TourConstraints | None,
             ) -> tuple[TourConstraints, SequencingProblem | MatrixProblem, Canonical]:
     """The validated constraints, the problem to search (an arm's home appended) and its
@@ -630,7 +658,11 @@ def _certify(problem: SequencingProblem | MatrixProblem, canon: Canonical, total
     if isinstance(problem, SequencingProblem) and problem.optimizes_configurations:
         return "not certified: the MILP handles fixed configurations only"
     try:
-        if canon.needs_pins or canon.open_path or not problem.symmetric:
+        if canon.open_path and not canon.pairs.size and problem.symmetric:
+            m, offset = symmetric_path_matrix(problem.matrix, canon.first,
+                                              None if canon.last < 0 else canon.last)
+            optimum = milp_optimum(m, time_limit=time_limit)[0] - offset
+        elif canon.needs_pins or canon.open_path or not problem.symmetric:
             if not np.all(np.isfinite(canon.matrix)):
                 return "not certified: the MTZ MILP needs finite travel times"
             optimum, _ = milp_pinned(canon.matrix, canon.first, canon.last, canon.pairs,

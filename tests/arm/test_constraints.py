@@ -339,3 +339,17 @@ def test_read_precedence(tmp_path) -> None:
     bad.write_text("0,3\n1;2\n")
     with pytest.raises(InputDataError, match=r"line 2: expected 'a,b'"):
         read_precedence(bad)
+
+
+@pytest.mark.parametrize("end", [None, 4])
+def test_symmetric_path_matrix_turns_the_best_path_into_the_best_tour(end) -> None:
+    from subtask_opt.arm.constraints import symmetric_path_matrix
+    from subtask_opt.arm.exact import held_karp
+
+    rng = np.random.default_rng(2)
+    xy = rng.random((7, 2))
+    m = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1))
+    tour_matrix, offset = symmetric_path_matrix(m, 1, end)
+    np.testing.assert_array_equal(tour_matrix, tour_matrix.T)
+    c = TourConstraints(tour="open", start=1, end=end)
+    assert held_karp(tour_matrix)[0] - offset == pytest.approx(brute_force(m, c), rel=1e-12)
