@@ -272,9 +272,13 @@ def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
 
     Asymmetric formulation: binary arcs ``x_ij`` with in- and out-degree one,
     and Miller-Tucker-Zemlin positions ``u_i`` in [1, N-1] for the nodes other
-    than ``first`` (``u_j >= u_i + 1`` on a used arc, which forbids subtours);
-    a pair ``(a, b)`` is ``u_a + 1 <= u_b``, a pinned end fixes the arc
-    ``last -> first``. Solved by HiGHS with a zero gap; nothing is printed.
+    than ``first`` (``u_j >= u_i + 1`` on a used arc, which forbids subtours;
+    lifted as Desrochers and Laporte do); a pair ``(a, b)`` is ``u_a + 1 <= u_b``,
+    a pinned end fixes the arc ``last -> first``. The transitive closure of the
+    pairs tightens it: a node's position lies between its number of ancestors
+    and N - 1 minus its number of descendants, and arcs against the closure (or
+    skipping a node that must lie between) are fixed to zero. Solved by HiGHS
+    with a zero gap; nothing is printed.
     Raises :class:`SubtaskOptError` if optimality is not proven (within
     ``time_limit`` seconds) or no tour keeps the pairs.
     """
@@ -284,6 +288,15 @@ def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise SubtaskOptError("milp_pinned needs highspy") from exc
     n = m.shape[0]
+    for a, b in p.tolist():
+        if b == first:
+            raise SubtaskOptError(f"no tour keeps the pair ({a}, {b}): {b} is the start")
+    before = _precedence_closure(n, first, last, p)
+    if np.any(np.diag(before)):
+        raise SubtaskOptError("no tour keeps the pairs: they form a cycle")
+    ancestors = before.sum(axis=0)  # first counts: it precedes everyone
+    descendants = before.sum(axis=1)
+    between = (before.astype(np.int64) @ before.astype(np.int64)) > 0  # a < c < b for some c
     arcs = [(i, j) for i in range(n) for j in range(n) if i != j]
     arc = {a: k for k, a in enumerate(arcs)}
     n_arcs = len(arcs)
@@ -298,6 +311,11 @@ def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
     inf = highspy.kHighsInf
     lower = np.zeros(n_arcs)
     upper = np.ones(n_arcs)
+    for k, (i, j) in enumerate(arcs):
+        if (j != first and before[j, i]) or between[i, j] or (
+                j == first and descendants[i] > 0) or (
+                i == first and ancestors[j] > 1):
+            upper[k] = 0.0  # against the order, or skipping a node that lies between
     if last >= 0:
         lower[arc[(last, first)]] = 1.0
     empty_i = np.array([], dtype=np.int32)
@@ -305,8 +323,9 @@ def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
               np.array([]))
     h.changeColsIntegrality(n_arcs, np.arange(n_arcs, dtype=np.int32),
                             np.full(n_arcs, highspy.HighsVarType.kInteger))
-    h.addCols(n - 1, np.zeros(n - 1), np.ones(n - 1), np.full(n - 1, n - 1.0), 0, empty_i,
-              empty_i, np.array([]))
+    u_low = np.array([float(ancestors[v]) for v in others])  # first is one ancestor
+    u_high = np.array([n - 1.0 - descendants[v] for v in others])
+    h.addCols(n - 1, np.zeros(n - 1), u_low, u_high, 0, empty_i, empty_i, np.array([]))
     for v in range(n):
         out = np.array([arc[(v, w)] for w in range(n) if w != v], dtype=np.int32)
         into = np.array([arc[(w, v)] for w in range(n) if w != v], dtype=np.int32)
@@ -314,12 +333,11 @@ def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
         h.addRow(1.0, 1.0, n - 1, into, np.ones(n - 1))
     for i in others:
         for j in others:
-            if i != j:  # u_i - u_j + (n - 1) x_ij <= n - 2
-                h.addRow(-inf, n - 2.0, 3, np.array([u[i], u[j], arc[(i, j)]], dtype=np.int32),
-                         np.array([1.0, -1.0, n - 1.0]))
+            if i != j:  # u_i - u_j + (n - 1) x_ij + (n - 3) x_ji <= n - 2
+                h.addRow(-inf, n - 2.0, 4,
+                         np.array([u[i], u[j], arc[(i, j)], arc[(j, i)]], dtype=np.int32),
+                         np.array([1.0, -1.0, n - 1.0, n - 3.0]))
     for a, b in p.tolist():
-        if b == first:
-            raise SubtaskOptError(f"no tour keeps the pair ({a}, {b}): {b} is the start")
         if a != first:
             h.addRow(-inf, -1.0, 2, np.array([u[a], u[b]], dtype=np.int32),
                      np.array([1.0, -1.0]))
@@ -335,6 +353,21 @@ def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
         order.append(succ[order[-1]])
     tour = np.array(order, dtype=np.int64)
     return tour_length(m, tour), tour
+
+
+def _precedence_closure(n: int, first: int, last: int, pairs: np.ndarray) -> np.ndarray:
+    """``before[a, b]``: a must come before b (the pairs, the pins, transitively)."""
+    before = np.zeros((n, n), dtype=bool)
+    before[first, :] = True
+    before[first, first] = False
+    if last >= 0:
+        before[:, last] = True
+        before[last, last] = False
+    for a, b in pairs.tolist():
+        before[a, b] = True
+    for k in range(n):  # Warshall
+        before |= before[:, k:k + 1] & before[k:k + 1, :]
+    return before
 
 
 def exact_constrained(matrix: np.ndarray, constraints: TourConstraints, *,
