@@ -13,7 +13,8 @@ Planners live in :mod:`subtask_opt.planners`; figures in :mod:`subtask_opt.plott
 
 from subtask_opt import _kernel_cache  # noqa: F401  (first: selects numba's cache folder)
 from subtask_opt.arm.configurations import best_configurations
-from subtask_opt.arm.exact import held_karp, milp_optimum
+from subtask_opt.arm.constraints import TourConstraints
+from subtask_opt.arm.exact import exact_constrained, held_karp, milp_optimum
 from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
 from subtask_opt.arm.report import TourReport
 from subtask_opt.arm.sequencing import (
@@ -47,7 +48,7 @@ __all__ = [
     "SequencingProblem", "MatrixProblem", "SolverParams", "Result", "TourReport", "solve",
     "PRESETS", "DEFAULT_TIME_MODEL",
     "best_configurations", "TourTrajectory", "tour_trajectory", "validate_trajectory",
-    "held_karp", "milp_optimum",
+    "held_karp", "milp_optimum", "TourConstraints", "exact_constrained",
     "MaxGenerations", "MaxRuntime", "NoImprovement", "TargetCost",
     "History", "PlanResult",
     "SubtaskOptError", "ParameterError", "InputDataError", "UnreachableError", "NoPathError",

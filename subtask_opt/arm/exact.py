@@ -9,6 +9,10 @@
   30-subtask instances in well under a second.
 * :func:`optimal_tours` - every optimal tour, by the same MILP with a no-good
   cut after each one found.
+* :func:`held_karp_pinned` and :func:`milp_pinned` - the same two methods for
+  tours with a pinned start, an optional pinned end and precedence pairs
+  (asymmetric costs welcome); :func:`exact_constrained` applies them to a matrix
+  problem with :class:`~subtask_opt.arm.constraints.TourConstraints`.
 """
 
 from __future__ import annotations
@@ -17,11 +21,15 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, SubtaskOptError, require_int
 from subtask_opt.base.files import quiet_stdout
+
+if TYPE_CHECKING:
+    from subtask_opt.arm.constraints import TourConstraints
 
 
 def _square_matrix(matrix: np.ndarray) -> np.ndarray:
@@ -256,3 +264,223 @@ def _walk(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         order.append(nxt)
         prev, cur = cur, nxt
     return np.array(order, dtype=np.int64)
+
+
+# --- tours with a pinned start, an optional pinned end and precedence pairs ---------------
+#
+# These work on the canonical form of :mod:`subtask_opt.arm.constraints`: a closed tour
+# over a (possibly asymmetric) matrix starting at ``first``, ending at ``last`` (-1: any
+# node) and placing ``a`` before ``b`` for every pair. An open path is a closed tour whose
+# return leg costs nothing; :func:`exact_constrained` does that transform for you.
+
+HELD_KARP_PINNED_MAX = 13
+"""The most nodes :func:`held_karp_pinned` accepts (2^12 subsets x 12 x 12 steps)."""
+
+
+def _pinned_inputs(matrix: np.ndarray, first: int, last: int,
+                   pairs: np.ndarray | Sequence[tuple[int, int]]) -> tuple[np.ndarray, np.ndarray]:
+    m = _square_matrix(matrix)
+    n = m.shape[0]
+    p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if not 0 <= first < n or not -1 <= last < n or last == first:
+        raise ParameterError(f"first={first} and last={last} must be distinct nodes in "
+                             f"0..{n - 1} (last -1: free)")
+    if p.size and (p.min() < 0 or p.max() >= n):
+        raise ParameterError(f"precedence pairs must name nodes in 0..{n - 1}")
+    return m, p
+
+
+def held_karp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
+                     pairs: np.ndarray | Sequence[tuple[int, int]] = (),
+                     ) -> tuple[float, np.ndarray]:
+    """Exact minimum closed tour from ``first`` (ending at ``last`` if >= 0) keeping the pairs.
+
+    Dynamic programming over (set of visited nodes, last node): a node may join
+    a set only when all its predecessors are in it, and ``last`` only as the
+    final node. O(2^N N^2) time; N <= :data:`HELD_KARP_PINNED_MAX`. Returns
+    ``(cost, tour)`` with ``tour[0] == first``; ``(inf, empty)`` if no tour
+    keeps every pair (a cycle).
+    """
+    m, p = _pinned_inputs(matrix, first, last, pairs)
+    n = m.shape[0]
+    if n > HELD_KARP_PINNED_MAX:
+        raise ParameterError(f"held_karp_pinned is for at most {HELD_KARP_PINNED_MAX} nodes, "
+                             f"got {n}")
+    others = [v for v in range(n) if v != first]
+    bit = {v: i for i, v in enumerate(others)}
+    r = n - 1
+    need = [0] * r  # bit mask of the predecessors of others[i] (first is always placed)
+    for a, b in p.tolist():
+        if b == first:
+            return math.inf, np.empty(0, dtype=np.int64)
+        if a != first:
+            need[bit[b]] |= 1 << bit[a]
+    full = (1 << r) - 1
+    lastbit = -1 if last < 0 else bit[last]
+    cost = np.full((1 << r, r), math.inf)
+    parent = np.full((1 << r, r), -1, dtype=np.int64)
+    for k in range(r):
+        if need[k] == 0 and (k != lastbit or r == 1):
+            cost[1 << k, k] = m[first, others[k]]
+    for subset in range(1, full + 1):
+        row = cost[subset]
+        for j in range(r):
+            c = row[j]
+            if c == math.inf:
+                continue
+            src = others[j]
+            for k in range(r):
+                if (subset >> k) & 1 or need[k] & ~subset:
+                    continue
+                nxt = subset | (1 << k)
+                if k == lastbit and nxt != full:
+                    continue
+                value = c + m[src, others[k]]
+                if value < cost[nxt, k]:
+                    cost[nxt, k] = value
+                    parent[nxt, k] = j
+    closing = cost[full] + m[others, first]
+    end = int(np.argmin(closing))
+    best = float(closing[end])
+    if best == math.inf:
+        return math.inf, np.empty(0, dtype=np.int64)
+    order = [others[end]]
+    subset = full
+    j = end
+    while parent[subset, j] >= 0:
+        prev = int(parent[subset, j])
+        subset ^= 1 << j
+        j = prev
+        order.append(others[j])
+    return best, np.array([first] + order[::-1], dtype=np.int64)
+
+
+def milp_pinned(matrix: np.ndarray, first: int = 0, last: int = -1,
+                pairs: np.ndarray | Sequence[tuple[int, int]] = (), *,
+                time_limit: float | None = None) -> tuple[float, np.ndarray]:
+    """Certified minimum closed tour from ``first`` (to ``last``) keeping the pairs, by MILP.
+
+    Asymmetric formulation: binary arcs ``x_ij`` with in- and out-degree one,
+    and Miller-Tucker-Zemlin positions ``u_i`` in [1, N-1] for the nodes other
+    than ``first`` (``u_j >= u_i + 1`` on a used arc, which forbids subtours;
+    lifted as Desrochers and Laporte do); a pair ``(a, b)`` is ``u_a + 1 <= u_b``,
+    a pinned end fixes the arc ``last -> first``. The transitive closure of the
+    pairs tightens it: a node's position lies between its number of ancestors
+    and N - 1 minus its number of descendants, and arcs against the closure (or
+    skipping a node that must lie between) are fixed to zero. Solved by HiGHS
+    with a zero gap; nothing is printed.
+    Raises :class:`SubtaskOptError` if optimality is not proven (within
+    ``time_limit`` seconds) or no tour keeps the pairs.
+    """
+    m, p = _pinned_inputs(matrix, first, last, pairs)
+    try:
+        import highspy
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise SubtaskOptError("milp_pinned needs highspy") from exc
+    n = m.shape[0]
+    for a, b in p.tolist():
+        if b == first:
+            raise SubtaskOptError(f"no tour keeps the pair ({a}, {b}): {b} is the start")
+    before = _precedence_closure(n, first, last, p)
+    if np.any(np.diag(before)):
+        raise SubtaskOptError("no tour keeps the pairs: they form a cycle")
+    ancestors = before.sum(axis=0)  # first counts: it precedes everyone
+    descendants = before.sum(axis=1)
+    between = (before.astype(np.int64) @ before.astype(np.int64)) > 0  # a < c < b for some c
+    arcs = [(i, j) for i in range(n) for j in range(n) if i != j]
+    arc = {a: k for k, a in enumerate(arcs)}
+    n_arcs = len(arcs)
+    others = [v for v in range(n) if v != first]
+    u = {v: n_arcs + k for k, v in enumerate(others)}
+    with quiet_stdout():
+        h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    h.setOptionValue("mip_rel_gap", 0.0)
+    if time_limit is not None:
+        h.setOptionValue("time_limit", float(time_limit))
+    inf = highspy.kHighsInf
+    lower = np.zeros(n_arcs)
+    upper = np.ones(n_arcs)
+    for k, (i, j) in enumerate(arcs):
+        if (j != first and before[j, i]) or between[i, j] or (
+                j == first and descendants[i] > 0) or (
+                i == first and ancestors[j] > 1):
+            upper[k] = 0.0  # against the order, or skipping a node that lies between
+    if last >= 0:
+        lower[arc[(last, first)]] = 1.0
+    empty_i = np.array([], dtype=np.int32)
+    h.addCols(n_arcs, np.array([m[i, j] for i, j in arcs]), lower, upper, 0, empty_i, empty_i,
+              np.array([]))
+    h.changeColsIntegrality(n_arcs, np.arange(n_arcs, dtype=np.int32),
+                            np.full(n_arcs, highspy.HighsVarType.kInteger))
+    u_low = np.array([float(ancestors[v]) for v in others])  # first is one ancestor
+    u_high = np.array([n - 1.0 - descendants[v] for v in others])
+    h.addCols(n - 1, np.zeros(n - 1), u_low, u_high, 0, empty_i, empty_i, np.array([]))
+    for v in range(n):
+        out = np.array([arc[(v, w)] for w in range(n) if w != v], dtype=np.int32)
+        into = np.array([arc[(w, v)] for w in range(n) if w != v], dtype=np.int32)
+        h.addRow(1.0, 1.0, n - 1, out, np.ones(n - 1))
+        h.addRow(1.0, 1.0, n - 1, into, np.ones(n - 1))
+    for i in others:
+        for j in others:
+            if i != j:  # u_i - u_j + (n - 1) x_ij + (n - 3) x_ji <= n - 2
+                h.addRow(-inf, n - 2.0, 4,
+                         np.array([u[i], u[j], arc[(i, j)], arc[(j, i)]], dtype=np.int32),
+                         np.array([1.0, -1.0, n - 1.0, n - 3.0]))
+    for a, b in p.tolist():
+        if a != first:
+            h.addRow(-inf, -1.0, 2, np.array([u[a], u[b]], dtype=np.int32),
+                     np.array([1.0, -1.0]))
+    h.run()
+    status = h.getModelStatus()
+    if status != highspy.HighsModelStatus.kOptimal:
+        raise SubtaskOptError(f"HiGHS did not prove an optimal tour: "
+                              f"{h.modelStatusToString(status)}")
+    x = np.asarray(h.getSolution().col_value)[:n_arcs] > 0.5
+    succ = {arcs[k][0]: arcs[k][1] for k in np.flatnonzero(x)}
+    order = [first]
+    while len(order) < n:
+        order.append(succ[order[-1]])
+    tour = np.array(order, dtype=np.int64)
+    return tour_length(m, tour), tour
+
+
+def _precedence_closure(n: int, first: int, last: int, pairs: np.ndarray) -> np.ndarray:
+    """``before[a, b]``: a must come before b (the pairs, the pins, transitively)."""
+    before = np.zeros((n, n), dtype=bool)
+    before[first, :] = True
+    before[first, first] = False
+    if last >= 0:
+        before[:, last] = True
+        before[last, last] = False
+    for a, b in pairs.tolist():
+        before[a, b] = True
+    for k in range(n):  # Warshall
+        before |= before[:, k:k + 1] & before[k:k + 1, :]
+    return before
+
+
+def exact_constrained(matrix: np.ndarray, constraints: TourConstraints, *,
+                      method: str = "held_karp", default_start: int = 0,
+                      time_limit: float | None = None) -> tuple[float, np.ndarray]:
+    """The optimum of a matrix problem under ``constraints``, in the user's terms.
+
+    Returns ``(total, order)``: ``order`` without the home, ``total`` without the
+    free return leg of an open path. ``method``: ``"held_karp"`` (N <= 13) or
+    ``"milp"``.
+    """
+    from subtask_opt.arm.constraints import canonical
+
+    if method not in ("held_karp", "milp"):
+        raise ParameterError(f"method must be 'held_karp' or 'milp', got {method!r}")
+    m = _square_matrix(matrix)
+    constraints.check_size(m.shape[0], matrix_home=True)
+    canon = canonical(m, constraints, default_start=default_start)
+    if method == "held_karp":
+        cost, tour = held_karp_pinned(canon.matrix, canon.first, canon.last, canon.pairs)
+    else:
+        cost, tour = milp_pinned(canon.matrix, canon.first, canon.last, canon.pairs,
+                                 time_limit=time_limit)
+    if tour.size == 0:
+        raise SubtaskOptError("no tour keeps every constraint")
+    return float(np.sum(canon.user_legs(m, tour))), canon.user_order(tour)

@@ -62,7 +62,20 @@ def register(root: argparse._SubParsersAction) -> None:
                    help="line model: drive an infeasible straight line as a joint move "
                         "(default) or forbid it")
     p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
-                   help="index of the subtask the tour starts and ends at")
+                   help="index of the subtask the tour (or open path) starts at")
+    shape = p.add_argument_group("tour shape and constraints")
+    shape.add_argument("--tour", choices=("closed", "open"), default="closed",
+                       help="closed: return to the start (default); open: a path that does "
+                            "not come back")
+    shape.add_argument("--end", type=non_negative_int, default=None, metavar="I",
+                       help="(--tour open) the subtask the path ends at (default: free)")
+    shape.add_argument("--home", type=_signed_numbers, default=None, metavar="X,Y|Q1,...,QN",
+                       help="visited first and last, not a subtask: a point X,Y (m) the planar "
+                            "arm must reach, or for a serial arm its home configuration in "
+                            "degrees (default there: the robot file's home, if any)")
+    shape.add_argument("--precedence", default=None, metavar="FILE",
+                       help="text file of lines 'a,b': subtask a before subtask b (0-based "
+                            "row indices, as in the printed order)")
     p.add_argument("--preset", default="default", choices=PRESETS,
                    help="solver preset (default: micro-GA with local search)")
     p.add_argument("--seed", type=seed, default=0, help="solver seed in [0, 2**63) (default 0)")
@@ -99,8 +112,9 @@ def run(args: argparse.Namespace) -> int:
     from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
     from subtask_opt.arm.tasks import CASE_NAMES, builtin_case, load_subtasks
 
-    refuse_overwriting_inputs([args.case, args.robot],
+    refuse_overwriting_inputs([args.case, args.robot, args.precedence],
                               [args.json, args.plot, args.trajectory, args.animate])
+    constraints = _constraints(args)
     arm = load_arm(args.robot)
     if args.vmax or args.amax or args.jmax:
         arm = arm.with_joint_limits(velocity=args.vmax, acceleration=args.amax, jerk=args.jmax)
@@ -122,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
         stop = stop + params.default_stop(len(subtasks))
     result = solve(problem, seed=args.seed, stop=stop, params=params,
                    progress=not args.no_progress, certify=args.certify,
-                   certify_time_limit=args.certify_time_limit)
+                   certify_time_limit=args.certify_time_limit, constraints=constraints)
     report = result.report
     assert report is not None
     print(result.summary())
@@ -162,6 +176,26 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _constraints(args: argparse.Namespace) -> Any:
+    """The ``TourConstraints`` of the shape options (an unsupported output: one error line)."""
+    from subtask_opt.arm.constraints import TourConstraints, read_precedence
+    from subtask_opt.base.errors import ParameterError
+
+    if args.home is not None and len(args.home) != 2:
+        raise ParameterError(f"--home takes a point X,Y, got {len(args.home)} numbers")
+    pairs = read_precedence(args.precedence) if args.precedence else ()
+    constraints = TourConstraints(tour=args.tour, end=args.end,
+                                  home=None if args.home is None else tuple(args.home),
+                                  precedence=pairs)
+    if args.tour == "open" or args.home is not None:
+        wanted = [flag for flag, value in (("--plot", args.plot), ("--trajectory",
+                  args.trajectory), ("--animate", args.animate)) if value]
+        if wanted:
+            raise ParameterError(f"{', '.join(wanted)} draw closed tours over the subtasks; "
+                                 "not available with --tour open or --home yet")
+    return constraints
+
+
 def _executed(args: argparse.Namespace, problem: Any, result: Any) -> Any:
     """The tour's trajectory and its check; None (after one line) when it is invalid."""
     from subtask_opt.arm.trajectory import tour_trajectory, validate_trajectory
@@ -194,16 +228,13 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, trajectory: Any) -
 
 # ---------------------------------------------------------------- serial arms (6-/7-DOF)
 
-_SERIAL_FLAGS = ("home", "scene", "standoff", "axis_step", "tool_frame", "limits")
+_SERIAL_FLAGS = ("scene", "standoff", "axis_step", "tool_frame", "limits")
 
 
 def _add_serial_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "serial arms (--robot ur3|ur5|ur10|panda|vs060_drill|PATH.urdf; --case is a CSV of "
         "x,y,z,dx,dy,dz or x,y,z,qx,qy,qz,qw rows)")
-    g.add_argument("--home", type=_degrees, metavar="Q1,...,QN",
-                   help="home configuration in degrees; the tour starts and ends there "
-                        "(default: the robot file's home, if any)")
     g.add_argument("--scene", metavar="SCENE.json",
                    help='boxes to avoid: {"boxes": [{"name", "center", "half_extents", '
                         '"rotation"}]}')
@@ -217,17 +248,17 @@ def _add_serial_options(p: argparse.ArgumentParser) -> None:
                    help="a named limit set of the robot or a JSON file of per-joint limits")
 
 
-def _degrees(text: str) -> tuple[float, ...]:
-    """Comma-separated finite joint values (degrees)."""
+def _signed_numbers(text: str) -> tuple[float, ...]:
+    """Comma-separated finite numbers in [-1e4, 1e4] (a point in m, or joint values in degrees)."""
     import math
 
     try:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"expected comma-separated numbers (degrees), got {text!r}") from None
+            f"expected comma-separated numbers, got {text!r}") from None
     if not values or not all(math.isfinite(v) and abs(v) <= 1e4 for v in values):
-        raise argparse.ArgumentTypeError(f"expected finite degrees in [-1e4, 1e4], got {text!r}")
+        raise argparse.ArgumentTypeError(f"expected finite numbers in [-1e4, 1e4], got {text!r}")
     return values
 
 

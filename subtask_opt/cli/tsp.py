@@ -56,7 +56,13 @@ def run(args: argparse.Namespace) -> int:
     print(f"runtime      {solution.runtime_s:.2f} s (bound {solution.bound_runtime_s:.2f} s, "
           f"{solution.generations} generations, seed {solution.seed})")
     if args.json:
-        write_json(args.json, solution.to_dict())
+        payload = solution.to_dict()
+        # the shape fields of every solver JSON (TSPLIB tours are closed and unconstrained;
+        # "tour" already holds the 1-based TSPLIB tour here, so the shape is "tour_shape")
+        payload.update({"total_time": solution.length, "tour_shape": "closed",
+                        "start": int(solution.order[0]), "end": None, "home": None,
+                        "precedence": 0})
+        write_json(args.json, payload)
         print(f"wrote {args.json}")
     if args.plot:
         from subtask_opt.plotting.tsp import save_tour_figure

@@ -166,3 +166,5 @@ def _improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
 register(Kind.PERMUTATION, OperatorSet(
     permutation.randomize, permutation.tour_cost, permutation.crossover,
     permutation.no_mutation, permutation.improve))
+
+from subtask_opt.ga import precedence  # noqa: E402,F401  (registers the pinned permutation)

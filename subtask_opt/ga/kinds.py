@@ -17,6 +17,9 @@ class Kind(IntEnum):
     WAYPOINT_PATH = 2
     """A variable-length list of grid waypoints
     (registered by :mod:`subtask_opt.planners.grid._waypoint_kernels`)."""
+    PINNED_PERMUTATION = 3
+    """A closed tour with a pinned first (and maybe last) node and precedence pairs
+    (:mod:`subtask_opt.ga.precedence`)."""
 
 
 # Numba sees a kind through the *type* of a tag argument: a distinct NamedTuple
@@ -34,9 +37,14 @@ class WaypointPathTag(NamedTuple):
     kind: int = Kind.WAYPOINT_PATH
 
 
+class PinnedPermutationTag(NamedTuple):
+    kind: int = Kind.PINNED_PERMUTATION
+
+
 TAGS: dict[Kind, type] = {Kind.PERMUTATION: PermutationTag,
                           Kind.CONFIGURED_PERMUTATION: ConfiguredPermutationTag,
-                          Kind.WAYPOINT_PATH: WaypointPathTag}
+                          Kind.WAYPOINT_PATH: WaypointPathTag,
+                          Kind.PINNED_PERMUTATION: PinnedPermutationTag}
 
 
 def tag(kind: Kind) -> tuple[int]:
