@@ -8,7 +8,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 OUT := out
-FUZZ_EXAMPLES ?= 2000
+FUZZ_EXAMPLES ?= 200
 PAPER_WORKERS ?= 2
 
 .PHONY: demo test bench papers lint coverage fuzz clean
