@@ -19,6 +19,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -231,7 +232,7 @@ def run_ga(
     kind: Kind,
     config: GAConfig,
     data: np.ndarray,
-    aux: np.ndarray,
+    aux: Any,
     *,
     max_genes: int,
     seed: int,
@@ -250,7 +251,8 @@ def run_ga(
     require_int("run_ga", "max_genes", max_genes, 1)
     rng = np.random.default_rng(seed)
     data = np.ascontiguousarray(data, dtype=np.float64)
-    aux = np.ascontiguousarray(aux, dtype=np.float64)
+    if isinstance(aux, np.ndarray):  # a kind's parameters may also be a NamedTuple
+        aux = np.ascontiguousarray(aux, dtype=np.float64)
     params: LoopParams = config.loop_params()
     pop = np.zeros((config.population, max_genes), dtype=np.int64)
     lengths = np.zeros(config.population, dtype=np.int64)
@@ -317,11 +319,12 @@ def run_in_chunks(run_chunk: Callable[[int], int], progress: Callable[[], Progre
     a stall limit or target it enforces itself) and returns how many ran;
     ``progress()`` describes the state between chunks. Chunks never pass a
     generation-based limit, so a seeded run is the same however it is chunked;
-    they grow while fast so that time-based criteria are still checked often.
+    they start at one generation and double while a chunk takes under 0.05 s, so
+    time-based criteria are checked often even when a generation is slow.
     ``on_chunk`` (a progress bar, say) is called after each chunk. The
     criteria are first asked after the first chunk, which also initialises.
     """
-    chunk_cap = 64
+    chunk_cap = 1
     first = True
     while True:
         state = progress()
