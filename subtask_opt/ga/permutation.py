@@ -10,13 +10,14 @@ the N x K table of each city's nearest cities.
 chromosome type):
 
 * :data:`SEARCH_PAPER` - the paper's micro-GA: random restarts, no local search;
-* :data:`SEARCH_FAST` - for symmetric costs: restarts are short iterated local
-  searches from the best tour (local double-bridge kicks among nearby cities,
-  each polished and kept unless it made the tour longer) or randomised
-  nearest-neighbour tours; children are polished around the edges neither
-  parent has. The local search is an LK-style chain of 2-opt flips (depth
-  :data:`LK_DEPTH`, breadth :data:`LK_BREADTH`) plus Or-opt, on neighbour lists
-  with don't-look bits (a queue of active cities);
+* :data:`SEARCH_FAST` - for symmetric costs: restart individuals are iterated
+  local searches of ``aux.kicks`` kicks from the best tour (local double-bridge
+  kicks of segments up to :data:`KICK_SPAN` cities, each polished and kept unless
+  the tour got longer; rejected ones are undone from a log of flips) or polished
+  randomised nearest-neighbour tours; children of the greedy crossover are
+  polished around the edges neither parent has, then searched the same way. The
+  local search makes sequential 2-opt and 3-opt moves (Or-3opt) and Or-opt moves
+  on neighbour lists, with don't-look bits (a queue of active cities);
 * :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and an
   Or-opt/2-opt local search that scans neighbour lists (segment moves without
   reversal, whose cost does not depend on the direction of travel) with
@@ -41,10 +42,7 @@ SEARCH_FAST = 1
 SEARCH_EXACT = 2
 KICK_MODE = 30
 KICK_SPAN = 10
-LK_DEPTH = 6
-"""Most 2-opt flips in one LK-style move."""
-LK_BREADTH = (5, 3)
-"""Candidates tried for the first and the second flip of an LK-style move (then one)."""
+"""Longest segment a double-bridge kick of the iterated local search moves."""
 
 
 class PermutationAux(NamedTuple):
