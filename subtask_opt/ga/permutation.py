@@ -99,9 +99,10 @@ def neighbour_table(matrix: np.ndarray, k: int | None = None) -> np.ndarray:
 
 
 def default_kicks(n: int) -> int:
-    """Kicks of the iterated local search per restart individual for ``n`` cities:
-    about one per city, at least 30 and at most 1000."""
-    return int(min(1000, max(30, n)))
+    """Kicks of the iterated local search per restart individual and child for ``n``
+    cities: one per ten cities, at least 10 and at most 100 (a generation then costs
+    about as much as the polish of its children, and the default stop stays quick)."""
+    return int(min(100, max(10, n // 10)))
 
 
 def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.25,
