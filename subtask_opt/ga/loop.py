@@ -22,6 +22,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -403,7 +404,7 @@ def run_ga(
     kind: Kind,
     config: GAConfig,
     data: np.ndarray | tuple[object, ...],
-    aux: np.ndarray,
+    aux: Any,
     *,
     max_genes: int,
     seed: int,
@@ -421,9 +422,11 @@ def run_ga(
         raise ParameterError(f"run_ga: no operators are registered for {kind!r}")
     require_int("run_ga", "max_genes", max_genes, 1)
     rng = np.random.default_rng(seed)
-    if isinstance(data, np.ndarray):  # a kind may also take a NamedTuple of arrays
+    # a kind's data and parameters may also be NamedTuples of arrays
+    if isinstance(data, np.ndarray):
         data = np.ascontiguousarray(data, dtype=np.float64)
-    aux = np.ascontiguousarray(aux, dtype=np.float64)
+    if isinstance(aux, np.ndarray):
+        aux = np.ascontiguousarray(aux, dtype=np.float64)
     params: LoopParams = config.loop_params()
     pop = np.zeros((config.population, max_genes), dtype=np.int64)
     lengths = np.zeros(config.population, dtype=np.int64)
@@ -490,11 +493,12 @@ def run_in_chunks(run_chunk: Callable[[int], int], progress: Callable[[], Progre
     a stall limit or target it enforces itself) and returns how many ran;
     ``progress()`` describes the state between chunks. Chunks never pass a
     generation-based limit, so a seeded run is the same however it is chunked;
-    they grow while fast so that time-based criteria are still checked often.
+    they start at one generation and double while a chunk takes under 0.05 s, so
+    time-based criteria are checked often even when a generation is slow.
     ``on_chunk`` (a progress bar, say) is called after each chunk. The
     criteria are first asked after the first chunk, which also initialises.
     """
-    chunk_cap = 64
+    chunk_cap = 1
     first = True
     while True:
         state = progress()

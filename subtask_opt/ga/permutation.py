@@ -1,29 +1,35 @@
 """Permutation chromosomes for the travelling-salesman problem of sequencing.
 
 ``data`` is the N x N travel-time matrix; a chromosome is a closed tour, a
-permutation of 0..N-1. ``aux`` holds the operator parameters (see
-:func:`make_aux`):
+permutation of 0..N-1. ``aux`` is a :class:`PermutationAux` (build it with
+:func:`make_aux`): the search preset, the crossover fallback, the restart mix,
+the Or-opt segment length, the number of kicks of an iterated local search and
+the N x K table of each city's nearest cities.
 
-* ``aux[AUX_FALLBACK]`` - greedy-crossover fallback when both parents' next
-  cities are used: 0 picks an unvisited city at random (the paper), 1 the
-  nearest one;
-* ``aux[AUX_GRASP]`` - share of restart individuals built by randomised
-  nearest neighbour rather than by a double-bridge kick of the best tour;
-* ``aux[AUX_MAX_SEGMENT]`` - longest run Or-opt moves;
-* ``aux[AUX_NEIGHBOURS]`` = K, followed by the N x K table of each city's K
-  nearest cities (row-major), used by the fast local search;
-* ``aux[AUX_SEARCH]`` - how the operators search (a preset is a flag, not a
-  chromosome type): :data:`SEARCH_PAPER` (the paper's micro-GA: random
-  restarts, no local search), :data:`SEARCH_FAST` (kicked or GRASP restarts and
-  children polished by neighbour-list 2-opt/Or-opt around what changed; for
-  symmetric costs) or :data:`SEARCH_EXACT` (kicked restarts, full-sweep exact
-  2-opt/Or-opt; any costs).
+``aux.search`` says how the operators search (a preset is a flag, not a
+chromosome type):
+
+* :data:`SEARCH_PAPER` - the paper's micro-GA: random restarts, no local search;
+* :data:`SEARCH_FAST` - for symmetric costs: restart individuals are iterated
+  local searches of ``aux.kicks`` kicks from the best tour (local double-bridge
+  kicks of segments up to :data:`KICK_SPAN` cities, each polished and kept unless
+  the tour got longer; rejected ones are undone from a log of flips) or polished
+  randomised nearest-neighbour tours; children of the greedy crossover are
+  polished around the edges neither parent has, then searched the same way. The
+  local search makes sequential 2-opt and 3-opt moves (Or-3opt) and Or-opt moves
+  on neighbour lists, with don't-look bits (a queue of active cities);
+* :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and an
+  Or-opt/2-opt local search that scans neighbour lists (segment moves without
+  reversal, whose cost does not depend on the direction of travel) with
+  don't-look bits, then one exact full-sweep check.
 
 :func:`randomize`, :func:`crossover` and :func:`improve` are the operators the
-GA dispatch registers; they branch on ``aux[AUX_SEARCH]``.
+GA dispatch registers; they branch on ``aux.search``.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -31,11 +37,40 @@ from numba.np.random.random_methods import random_interval
 
 FALLBACK_RANDOM = 0.0
 FALLBACK_NEAREST = 1.0
-SEARCH_PAPER = 0.0
-SEARCH_FAST = 1.0
-SEARCH_EXACT = 2.0
-AUX_FALLBACK, AUX_GRASP, AUX_MAX_SEGMENT, AUX_NEIGHBOURS, AUX_SEARCH = range(5)
-_AUX_TABLE = 5
+SEARCH_PAPER = 0
+SEARCH_FAST = 1
+SEARCH_EXACT = 2
+KICK_MODE = 30
+KICK_SPAN = 10
+"""Longest segment a double-bridge kick of the iterated local search moves."""
+
+
+class PermutationAux(NamedTuple):
+    """The permutation operators' parameters (a numba-friendly named tuple).
+
+    Attributes:
+        search: :data:`SEARCH_PAPER`, :data:`SEARCH_FAST` or :data:`SEARCH_EXACT`.
+        fallback: greedy-crossover fallback when both parents' next cities are
+            used: :data:`FALLBACK_RANDOM` (the paper) or :data:`FALLBACK_NEAREST`.
+        grasp_share: share of restart individuals built by randomised nearest
+            neighbour rather than from the best tour.
+        max_segment: longest run Or-opt moves.
+        kicks: kicks of the iterated local search that builds a restart
+            individual from the best tour (:data:`SEARCH_FAST`; 0: one kick).
+        neighbours: (N, K) int64, each city's K nearest cities, nearest first.
+    """
+
+    search: int
+    fallback: float
+    grasp_share: float
+    max_segment: int
+    kicks: int
+    neighbours: np.ndarray
+
+
+AUX_SEARCH = 0
+"""Index of :attr:`PermutationAux.search` (for callers written for the old float
+array; ``aux.search`` is the name to use)."""
 
 
 def neighbour_table(matrix: np.ndarray, k: int | None = None) -> np.ndarray:
@@ -63,15 +98,36 @@ def neighbour_table(matrix: np.ndarray, k: int | None = None) -> np.ndarray:
     return table
 
 
+def default_kicks(n: int) -> int:
+    """Kicks of the iterated local search per restart individual and child for ``n``
+    cities: one per ten cities, at least 10 and at most 100 (a generation then costs
+    about as much as the polish of its children, and the default stop stays quick)."""
+    return int(min(100, max(10, n // 10)))
+
+
 def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.25,
-             max_segment: int = 3, neighbours: int = 8,
-             search: float = SEARCH_PAPER) -> np.ndarray:
-    """Pack the operator parameters and the first ``neighbours`` columns of
-    ``table`` (:func:`neighbour_table` of the matrix) into ``aux``."""
-    k = max(1, min(neighbours, table.shape[1]))
-    head = [FALLBACK_NEAREST if nearest_fallback else FALLBACK_RANDOM, grasp_share,
-            float(max_segment), float(k), float(search)]
-    return np.concatenate([np.array(head), table[:, :k].astype(float).ravel()])
+             max_segment: int = 3, neighbours: int = 8, search: int = SEARCH_PAPER,
+             kicks: int | None = None) -> PermutationAux:
+    """The operator parameters, with the first ``neighbours`` columns of ``table``
+    (:func:`neighbour_table` of the matrix); ``kicks`` defaults to :func:`default_kicks`."""
+    from subtask_opt.base.errors import ParameterError
+
+    if search not in (SEARCH_PAPER, SEARCH_FAST, SEARCH_EXACT):
+        raise ParameterError(f"make_aux: search must be SEARCH_PAPER (0), SEARCH_FAST (1) or "
+                             f"SEARCH_EXACT (2), got {search!r}")
+    table = np.asarray(table)
+    if table.ndim != 2 or table.shape[1] < 1:
+        raise ParameterError(f"make_aux: table must be an (N, K) array with K >= 1, got shape "
+                             f"{table.shape}")
+    k = max(1, min(int(neighbours), table.shape[1]))
+    n_kicks = default_kicks(table.shape[0]) if kicks is None else int(kicks)
+    if n_kicks < 0:
+        raise ParameterError(f"make_aux: kicks must be >= 0, got {kicks!r}")
+    return PermutationAux(
+        search=int(search),
+        fallback=FALLBACK_NEAREST if nearest_fallback else FALLBACK_RANDOM,
+        grasp_share=float(grasp_share), max_segment=int(max_segment), kicks=n_kicks,
+        neighbours=np.ascontiguousarray(table[:, :k], dtype=np.int64))
 
 
 @njit(cache=True)
@@ -99,10 +155,16 @@ def random_tour(genes, data, aux, rng, best, best_len):
 
 
 @njit(cache=True)
-def nearest_neighbour_tour(genes, data, rng):
+def nearest_neighbour_tour(genes, data, aux, rng):
     """Randomised nearest-neighbour tour: random first city, then one of the
-    two nearest unvisited cities at each step (a GRASP construction)."""
+    two nearest unvisited cities at each step (a GRASP construction).
+
+    The two are looked up in the neighbour list first and by a scan of all
+    cities only when fewer than two of the listed ones are unvisited.
+    """
     n = data.shape[0]
+    nb = aux.neighbours
+    k_nb = nb.shape[1]
     used = np.zeros(n, dtype=np.bool_)
     current = rng.integers(0, n)
     genes[0] = current
@@ -112,7 +174,8 @@ def nearest_neighbour_tour(genes, data, rng):
         second = -1
         d1 = np.inf
         d2 = np.inf
-        for c in range(n):
+        for t in range(k_nb):
+            c = nb[current, t]
             if used[c]:
                 continue
             d = data[current, c]
@@ -121,6 +184,19 @@ def nearest_neighbour_tour(genes, data, rng):
                 first, d1 = c, d
             elif d < d2:
                 second, d2 = c, d
+        if second < 0:
+            first = -1
+            d1 = np.inf
+            d2 = np.inf
+            for c in range(n):
+                if used[c]:
+                    continue
+                d = data[current, c]
+                if d < d1:
+                    second, d2 = first, d1
+                    first, d1 = c, d
+                elif d < d2:
+                    second, d2 = c, d
         nxt = second if second >= 0 and rng.random() < 0.3 else first
         genes[k] = nxt
         used[nxt] = True
@@ -136,8 +212,8 @@ def kicked_best(genes, data, aux, rng, best, best_len):
     undo in one step, so a restart explores a new basin near a good tour.
     """
     n = data.shape[0]
-    if best_len == 0 or rng.random() < aux[AUX_GRASP]:
-        return nearest_neighbour_tour(genes, data, rng)
+    if best_len == 0 or rng.random() < aux.grasp_share:
+        return nearest_neighbour_tour(genes, data, aux, rng)
     if n < 8:
         return random_tour(genes, data, aux, rng, best, best_len)
     # three distinct cut points in 1..n-1, sorted
@@ -167,7 +243,8 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     Start at the first city of a randomly chosen parent; from the current city
     take the cheaper of the two edges to its successors in the parents; if one
     successor is already in the child take the other; if both are, take an
-    unvisited city, at random or the nearest (``aux[0]``).
+    unvisited city, at random or the nearest (``aux.fallback``; the nearest is
+    looked up in the neighbour list first).
     """
     n = len_a
     succ_a = np.empty(n, dtype=np.int64)
@@ -179,23 +256,30 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     current = genes_a[0] if rng.random() < 0.5 else genes_b[0]
     child[0] = current
     used[current] = True
-    nearest = aux[AUX_FALLBACK] > 0.5
+    nearest = aux.fallback > 0.5
+    nb = aux.neighbours
     for k in range(1, n):
         na = succ_a[current]
-        nb = succ_b[current]
-        if not used[na] and not used[nb]:
-            nxt = na if data[current, na] <= data[current, nb] else nb
+        nb_ = succ_b[current]
+        if not used[na] and not used[nb_]:
+            nxt = na if data[current, na] <= data[current, nb_] else nb_
         elif not used[na]:
             nxt = na
-        elif not used[nb]:
-            nxt = nb
+        elif not used[nb_]:
+            nxt = nb_
         elif nearest:
             nxt = -1
             best_d = np.inf
-            for c in range(n):
+            for t in range(nb.shape[1]):
+                c = nb[current, t]
                 if not used[c] and data[current, c] < best_d:
                     best_d = data[current, c]
                     nxt = c
+            if nxt < 0:
+                for c in range(n):
+                    if not used[c] and data[current, c] < best_d:
+                        best_d = data[current, c]
+                        nxt = c
         else:
             pick = rng.integers(0, n - k)
             nxt = -1
@@ -327,20 +411,23 @@ def exact_local_search(genes, length, data, aux):
         _prefix_costs(genes, n, data, fwd, bwd)
         if _two_opt_pass(genes, n, data, fwd, bwd):
             continue
-        if _or_opt_pass(genes, n, data, fwd, bwd, scratch, min(int(aux[AUX_MAX_SEGMENT]), n - 3)):
+        if _or_opt_pass(genes, n, data, fwd, bwd, scratch, min(aux.max_segment, n - 3)):
             continue
         return n
 
 
 # ---------------------------------------------------------------------------
-# Fast local search for symmetric costs: neighbour lists + a queue of active
-# cities (don't-look bits). Only moves that add an edge to one of a city's K
-# nearest cities, shorter than the edge it removes, are tried.
+# Local search on neighbour lists with a queue of active cities (don't-look
+# bits). Only moves whose first new edge joins a city to one of its K nearest
+# cities, shorter than the edge it removes, are tried.
 
 
 @njit(cache=True)
 def _reverse(tour, pos, n, i, j):
-    """Reverse the cyclic run tour[i..j] (or its complement, same cycle)."""
+    """Reverse the cyclic run tour[i..j] (or its complement, same cycle).
+
+    Calling it again with the same ``i, j`` undoes it.
+    """
     length = (j - i) % n + 1
     if 2 * length > n:  # reversing the complement gives the same cycle, cheaper
         i, j = (j + 1) % n, (i - 1) % n
@@ -354,78 +441,227 @@ def _reverse(tour, pos, n, i, j):
 
 
 @njit(cache=True)
-def _move_run(tour, pos, n, i, seg, x_pos, reverse, scratch):
-    """Move the run tour[i..i+seg-1] to just after position x_pos."""
-    m = 0
-    k = (i + seg) % n
-    while True:
-        scratch[m] = tour[k]
-        m += 1
-        if k == x_pos:
-            break
-        k = (k + 1) % n
-    for t in range(seg):
-        scratch[m] = tour[(i + (seg - 1 - t if reverse else t)) % n]
-        m += 1
-    k = (x_pos + 1) % n
-    while m < n:
-        scratch[m] = tour[k]
-        m += 1
-        k = (k + 1) % n
-    for t in range(n):
-        tour[t] = scratch[t]
-        pos[scratch[t]] = t
+def _flip(genes, w, n, i, j):
+    """:func:`_reverse` of positions i..j, written to the undo log ``w.log`` (when the
+    log is full, ``w.state[3]`` is set and later flips are not logged)."""
+    _reverse(genes, w.pos, n, i, j)
+    k = w.state[2]
+    if k < w.log.shape[0]:
+        w.log[k, 0] = i
+        w.log[k, 1] = j
+        w.state[2] = k + 1
+    else:
+        w.state[3] = 1
 
 
 @njit(cache=True)
-def _push(queue, queued, tail, n, city):
+def _undo(genes, w, n):
+    """Undo the logged flips, newest first; False if the log overflowed (nothing undone)."""
+    if w.state[3] != 0:
+        return False
+    for k in range(w.state[2] - 1, -1, -1):
+        _reverse(genes, w.pos, n, w.log[k, 0], w.log[k, 1])
+    w.state[2] = 0
+    return True
+
+
+@njit(cache=True)
+def _shift_run(tour, pos, n, i, seg, x_pos):
+    """Move the run tour[i..i+seg-1] to just after position x_pos (outside the run),
+    same direction, shifting the cities on the shorter side between them (a flip
+    could reverse the direction of travel, which matters for asymmetric costs)."""
+    after = (x_pos - (i + seg - 1)) % n  # cities between the run's end and x, x included
+    before = n - seg - after  # cities between y and the run's start
+    run = np.empty(seg, dtype=tour.dtype)
+    for t in range(seg):
+        run[t] = tour[(i + t) % n]
+    if after <= before:  # shift the `after` cities back by seg, then write the run
+        for t in range(after):
+            c = tour[(i + seg + t) % n]
+            p = (i + t) % n
+            tour[p] = c
+            pos[c] = p
+        start = (i + after) % n
+    else:  # shift the `before` cities forward by seg (from the last), run goes before them
+        for t in range(before):
+            src = (i - 1 - t) % n
+            c = tour[src]
+            p = (src + seg) % n
+            tour[p] = c
+            pos[c] = p
+        start = (i - before) % n
+    for t in range(seg):
+        p = (start + t) % n
+        tour[p] = run[t]
+        pos[run[t]] = p
+
+
+@njit(cache=True)
+def _move_run(genes, w, n, i, seg, x_pos, reverse):
+    """Move the run genes[i..i+seg-1] to just after position x_pos (outside the run),
+    reversed or not: two or three flips over the shorter stretch between them."""
+    s0 = genes[i]
+    s1 = genes[(i + seg - 1) % n]
+    before_s1 = genes[(i + seg - 2) % n]  # the run's second city from s1 (if seg > 1)
+    after = (x_pos - (i + seg - 1)) % n  # cities between the run's end and x, x included
+    before = n - seg - after  # cities between y and the run's start
+    if after <= before:  # p [R][M] y -> p [M][R] y, M = q .. x
+        x = genes[x_pos]
+        before_x = genes[(x_pos - 1) % n]
+        q = genes[(i + seg) % n]
+        _reverse_path(genes, w, n, s0, genes[(i + 1) % n], x)  # [x..q][s1..s0]
+        if after > 1:
+            _reverse_path(genes, w, n, x, before_x, q)
+    else:  # x [B][R] q -> x [R][B] q, B = y .. p
+        y = genes[(x_pos + 1) % n]
+        p = genes[(i - 1) % n]
+        before_p = genes[(i - 2) % n]
+        _reverse_path(genes, w, n, y, genes[(x_pos + 2) % n], s1)  # [s1..s0][p..y]
+        if before > 1:
+            _reverse_path(genes, w, n, p, before_p, y)
+    if not reverse and seg > 1:
+        _reverse_path(genes, w, n, s1, before_s1, s0)
+
+
+@njit(cache=True)
+def _push(queue, queued, state, n, city):
+    """Append ``city`` to the circular queue unless it is in it (state = [head, tail])."""
     if not queued[city]:
         queued[city] = True
-        queue[tail % n] = city
-        tail += 1
-    return tail
+        queue[state[1] % n] = city
+        state[1] += 1
 
 
 @njit(cache=True)
-def local_search(genes, length, data, aux):
-    """2-opt and Or-opt to a local optimum for symmetric costs (fast), all cities active."""
-    return local_search_around(genes, length, data, aux, genes[:length].copy(), length)
+def _reverse_path(genes, w, n, u, u2, v):
+    """Flip the tour path from ``u`` (whose next city on the path is ``u2``) to ``v``,
+    whichever way round it lies in the array."""
+    if genes[(w.pos[u] + 1) % n] == u2:
+        _flip(genes, w, n, w.pos[u], w.pos[v])
+    else:
+        _flip(genes, w, n, w.pos[v], w.pos[u])
 
 
 @njit(cache=True)
-def _two_opt_move(a, genes, pos, n, data, aux, k_nb, touched):
-    """Apply the first improving 2-opt move that links ``a`` to one of its nearest
-    cities; write the four cities it touched into ``touched`` and return 4 (0: none)."""
-    eps = 1e-12
+def _three_opt_move(t1, genes, w, n, data, nb):
+    """Apply the first improving sequential 2-opt or 3-opt move that starts by
+    removing an edge at ``t1`` (Or-3opt, "or2opt" and "or3opt" of LK: each new edge
+    joins a chain end to one of its nearest cities and the partial gain stays
+    positive). Writes the six cities it touched into ``touched``; returns the gain.
+
+    With t2 next to t1 (direction ``s``), t3 near t2 and t4 next to t3:
+    t4 behind t3 is a 2-opt move, and a third edge (t5 near t4, t6 next to t5)
+    makes the 3-opt moves; t4 ahead of t3 splits off the cycle t2..t3, which a
+    third edge inside it rejoins (a segment move, reversed or not).
+    """
+    eps = 1e-10
+    k_nb = nb.shape[1]
+    pos = w.pos
+    touched = w.touched
     for side in range(2):
-        ia = pos[a]
-        b = genes[(ia + 1) % n] if side == 0 else genes[(ia - 1) % n]
-        d_ab = data[a, b]
-        for t in range(k_nb):
-            c = int(aux[_AUX_TABLE + a * k_nb + t])
-            d_ac = data[a, c]
-            if d_ac >= d_ab - eps:  # neighbours are sorted: no shorter new edge follows
+        s = 1 if side == 0 else -1
+        t2 = genes[(pos[t1] + s) % n]
+        g0 = data[t1, t2]
+        for a in range(k_nb):
+            t3 = nb[t2, a]
+            g1 = g0 - data[t2, t3]
+            if g1 <= eps:
                 break
-            ic = pos[c]
-            d = genes[(ic + 1) % n] if side == 0 else genes[(ic - 1) % n]
-            if c == b or d == a:
+            if t3 == t1:
                 continue
-            if d_ac + data[b, d] - d_ab - data[c, d] < -eps:
-                if side == 0:  # a b ... c d  ->  a c ... b d
-                    _reverse(genes, pos, n, (ia + 1) % n, ic)
-                else:  # d c ... b a  ->  d b ... c a
-                    _reverse(genes, pos, n, ic, (ia - 1) % n)
-                touched[0], touched[1], touched[2], touched[3] = a, b, c, d
-                return 4
-    return 0
+            l23 = ((pos[t3] - pos[t2]) * s) % n  # steps from t2 to t3 along s
+            for which in range(2):
+                if which == 0:  # t4 behind t3: a 2-opt move, or its 3-opt extensions
+                    t4 = genes[(pos[t3] - s) % n]
+                    if t4 == t2:
+                        continue
+                    big = g1 + data[t3, t4]
+                    gain = big - data[t4, t1]
+                    if gain > eps:
+                        _reverse_path(genes, w, n, t2, genes[(pos[t2] + s) % n], t4)
+                        touched[0], touched[1], touched[2], touched[3] = t1, t2, t3, t4
+                        touched[4], touched[5] = t1, t2
+                        return gain
+                    for c in range(k_nb):
+                        t5 = nb[t4, c]
+                        g2 = big - data[t4, t5]
+                        if g2 <= eps:
+                            break
+                        if t5 == t3 or t5 == t1 or t5 == t2:
+                            continue
+                        # after the 2-opt flip (t1 t4 .. t2 t3 ..), t6 is t5's
+                        # predecessor there: its successor inside t2..t4, else its predecessor
+                        inside = ((pos[t5] - pos[t2]) * s) % n < l23
+                        t6 = genes[(pos[t5] + s) % n] if inside else genes[(pos[t5] - s) % n]
+                        if t6 == t4 or t6 == t1:
+                            continue
+                        gain = g2 + data[t5, t6] - data[t6, t1]
+                        if gain > eps:
+                            _reverse_path(genes, w, n, t2, genes[(pos[t2] + s) % n], t4)
+                            # now t1 t4 ... t2 t3: the second flip reverses t4 .. t6
+                            if genes[(pos[t1] + 1) % n] == t4:
+                                _flip(genes, w, n, pos[t4], pos[t6])
+                            else:
+                                _flip(genes, w, n, pos[t6], pos[t4])
+                            touched[0], touched[1], touched[2] = t1, t2, t3
+                            touched[3], touched[4], touched[5] = t4, t5, t6
+                            return gain
+                else:  # t4 ahead of t3: the cycle t2..t3 must be rejoined inside
+                    t4 = genes[(pos[t3] + s) % n]
+                    if t4 == t1:
+                        continue
+                    big = g1 + data[t3, t4]
+                    for c in range(k_nb):
+                        t5 = nb[t4, c]
+                        g2 = big - data[t4, t5]
+                        if g2 <= eps:
+                            break
+                        l25 = ((pos[t5] - pos[t2]) * s) % n
+                        if l25 > l23:  # t5 outside t2..t3
+                            continue
+                        for nxt in range(2):
+                            if nxt == 0:  # t6 after t5: t1 [t6..t3] [t2..t5] t4
+                                if t5 == t3:
+                                    continue
+                                t6 = genes[(pos[t5] + s) % n]
+                            else:  # t6 before t5: t1 rev[t2..t6] rev[t5..t3] t4
+                                if t5 == t2:
+                                    continue
+                                t6 = genes[(pos[t5] - s) % n]
+                            gain = g2 + data[t5, t6] - data[t6, t1]
+                            if gain > eps:
+                                # each path's second city, before anything moves
+                                after_t2 = genes[(pos[t2] + s) % n]
+                                before_t3 = genes[(pos[t3] - s) % n]
+                                before_t5 = genes[(pos[t5] - s) % n]
+                                after_t5 = genes[(pos[t5] + s) % n]
+                                if nxt == 0:
+                                    _reverse_path(genes, w, n, t2, after_t2, t3)
+                                    if t3 != t6:
+                                        _reverse_path(genes, w, n, t3, before_t3, t6)
+                                    if t5 != t2:
+                                        _reverse_path(genes, w, n, t5, before_t5, t2)
+                                else:
+                                    if t2 != t6:
+                                        _reverse_path(genes, w, n, t2, after_t2, t6)
+                                    if t5 != t3:
+                                        _reverse_path(genes, w, n, t5, after_t5, t3)
+                                touched[0], touched[1], touched[2] = t1, t2, t3
+                                touched[3], touched[4], touched[5] = t4, t5, t6
+                                return gain
+    return 0.0
 
 
 @njit(cache=True)
-def _or_opt_move(a, genes, pos, n, data, aux, k_nb, max_seg, scratch, touched):
+def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     """Apply the first improving move of a run of 1..max_seg cities starting or
     ending at ``a`` next to one of the nearest cities of its end points (either
-    way round); write the six cities it touched into ``touched`` and return 6 (0: none)."""
-    eps = 1e-12
+    way round if ``reversible``, else kept in its direction: asymmetric costs);
+    write the six cities it touched into ``touched``; return the gain (0.0: none)."""
+    eps = 1e-10
+    k_nb = nb.shape[1]
+    pos = w.pos
+    touched = w.touched
     for seg in range(1, max_seg + 1):
         for end in range(2):
             i = pos[a] if end == 0 else (pos[a] - seg + 1) % n
@@ -439,8 +675,8 @@ def _or_opt_move(a, genes, pos, n, data, aux, k_nb, max_seg, scratch, touched):
             for which in range(2):
                 s = s0 if which == 0 else s1
                 for t in range(k_nb):
-                    c = int(aux[_AUX_TABLE + s * k_nb + t])
-                    if data[s, c] >= removed - eps:
+                    c = nb[s, t]
+                    if min(data[s, c], data[c, s]) >= removed - eps:
                         break
                     ic = pos[c]
                     if (ic - i) % n < seg:  # c is inside the run
@@ -452,94 +688,195 @@ def _or_opt_move(a, genes, pos, n, data, aux, k_nb, max_seg, scratch, touched):
                         x = genes[x_pos]
                         y = genes[(x_pos + 1) % n]
                         fwd = data[x, s0] + data[s1, y]
-                        rev = data[x, s1] + data[s0, y]
-                        if removed + data[x, y] - min(fwd, rev) > eps:
-                            _move_run(genes, pos, n, i, seg, x_pos, rev < fwd, scratch)
+                        rev = data[x, s1] + data[s0, y] if reversible else np.inf
+                        gain = removed + data[x, y] - min(fwd, rev)
+                        if gain > eps:
+                            if reversible:
+                                _move_run(genes, w, n, i, seg, x_pos, rev < fwd)
+                            else:
+                                _shift_run(genes, pos, n, i, seg, x_pos)
                             touched[0], touched[1], touched[2] = p, q, s0
                             touched[3], touched[4], touched[5] = s1, x, y
-                            return 6
-    return 0
+                            return gain
+    return 0.0
+
+
+class _Work(NamedTuple):
+    """Scratch space of the local search."""
+
+    pos: np.ndarray  # pos[city] = its index in the tour
+    queue: np.ndarray  # circular queue of active cities
+    queued: np.ndarray
+    state: np.ndarray  # [queue head, queue tail, flips logged, log overflowed]
+    touched: np.ndarray  # the cities the last move or kick changed
+    log: np.ndarray  # (L, 2) position pairs of the flips since the log was cleared
+
+
+@njit(cache=True)
+def _work(genes, n):
+    pos = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        pos[genes[i]] = i
+    return _Work(pos, np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
+                 np.zeros(4, dtype=np.int64), np.empty(8, dtype=np.int64),
+                 np.empty((1024, 2), dtype=np.int64))
+
+
+@njit(cache=True)
+def _polish(genes, n, data, aux, w, symmetric):
+    """Improve from the queued cities until no queued city has an improving move;
+    return the total gain. Symmetric costs: LK-style moves, then Or-opt; else
+    Or-opt without reversal only."""
+    nb = aux.neighbours
+    max_seg = min(aux.max_segment, n - 3)
+    gain_total = 0.0
+    # every move lowers the cost; the budget only guarantees termination if a
+    # caller breaks the contract (e.g. calls the symmetric search on asymmetric costs)
+    budget = 50 * n * n
+    while w.state[0] < w.state[1] and budget > 0:
+        budget -= 1
+        a = w.queue[w.state[0] % n]
+        w.state[0] += 1
+        w.queued[a] = False
+        moved = 0
+        gain = 0.0
+        if symmetric:
+            gain = _three_opt_move(a, genes, w, n, data, nb)
+            if gain > 0.0:
+                moved = 6
+        if moved == 0:
+            gain = _or_opt_move(a, genes, w, n, data, nb, max_seg, symmetric)
+            if gain > 0.0:
+                moved = 6
+        if moved > 0:
+            gain_total += gain
+            for k in range(moved):
+                _push(w.queue, w.queued, w.state, n, w.touched[k])
+            _push(w.queue, w.queued, w.state, n, a)
+    return gain_total
+
+
+@njit(cache=True)
+def local_search(genes, length, data, aux):
+    """LK-style moves and Or-opt to a local optimum for symmetric costs, all cities active."""
+    return local_search_around(genes, length, data, aux, genes[:length].copy(), length)
 
 
 @njit(cache=True)
 def local_search_around(genes, length, data, aux, active, n_active):
-    """2-opt and Or-opt for symmetric costs, starting from the cities ``active[:n_active]``.
+    """LK-style moves and Or-opt for symmetric costs, from the cities ``active[:n_active]``.
 
     A city whose moves all fail goes idle until a move changes one of its tour
     neighbours, so polishing a tour that changed in a few places costs little.
     """
     n = length
-    if n < 5:
+    if n < 8:
         return exact_local_search(genes, length, data, aux)
-    k_nb = int(aux[AUX_NEIGHBOURS])
-    max_seg = min(int(aux[AUX_MAX_SEGMENT]), n - 3)
-    pos = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        pos[genes[i]] = i
-    queue = np.empty(n, dtype=np.int64)
-    queued = np.zeros(n, dtype=np.bool_)
-    scratch = np.empty(n, dtype=genes.dtype)
-    touched = np.empty(6, dtype=np.int64)
-    head = 0
-    tail = 0
+    w = _work(genes, n)
     for i in range(n_active):
-        tail = _push(queue, queued, tail, n, active[i])
-    # Every move lowers the cost when costs are symmetric; the budget only
-    # guarantees termination if a caller breaks that contract.
-    budget = 50 * n * n
-    while head < tail and budget > 0:
-        budget -= 1
-        a = queue[head % n]
-        head += 1
-        queued[a] = False
-        moved = _two_opt_move(a, genes, pos, n, data, aux, k_nb, touched)
-        if moved == 0:
-            moved = _or_opt_move(a, genes, pos, n, data, aux, k_nb, max_seg, scratch, touched)
-        if moved > 0:
-            for k in range(moved):
-                tail = _push(queue, queued, tail, n, touched[k])
-            tail = _push(queue, queued, tail, n, a)
+        _push(w.queue, w.queued, w.state, n, active[i])
+    _polish(genes, n, data, aux, w, True)
+    return n
+
+
+@njit(cache=True)
+def asymmetric_local_search(genes, length, data, aux):
+    """Or-opt without reversal on neighbour lists (all cities active), then the exact
+    full-sweep 2-opt/Or-opt (:func:`exact_local_search`) to finish: any costs."""
+    n = length
+    if n >= 8:
+        w = _work(genes, n)
+        for i in range(n):
+            _push(w.queue, w.queued, w.state, n, genes[i])
+        _polish(genes, n, data, aux, w, False)
+    return exact_local_search(genes, length, data, aux)
+
+
+@njit(cache=True)
+def _double_bridge_kick(genes, w, n, data, rng, span):
+    """A local double-bridge kick: after a random position cut three consecutive
+    segments B, C, D of 1..``span`` cities each and put them back as D C B (four
+    edges change; a chain of 2-opt flips cannot easily undo it). Writes the eight end
+    cities into ``w.touched``; returns the cost change."""
+    span = max(1, min(span, (n - 2) // 3))
+    q1 = rng.integers(0, n)
+    lb = 1 + rng.integers(0, span)
+    lc = 1 + rng.integers(0, span)
+    ld = 1 + rng.integers(0, span)
+    q2 = q1 + lb
+    q3 = q2 + lc
+    q4 = q3 + ld
+    a, b = genes[q1 % n], genes[(q1 + 1) % n]
+    c, d = genes[q2 % n], genes[(q2 + 1) % n]
+    e, f = genes[q3 % n], genes[(q3 + 1) % n]
+    g, h = genes[q4 % n], genes[(q4 + 1) % n]
+    delta = (data[a, f] + data[g, d] + data[e, b] + data[c, h]
+             - data[a, b] - data[c, d] - data[e, f] - data[g, h])
+    before_c = genes[(q2 - 1) % n]
+    before_e = genes[(q3 - 1) % n]
+    before_g = genes[(q4 - 1) % n]
+    # B C D -> [g..f][e..d][c..b] -> flip each piece back
+    _reverse_path(genes, w, n, b, genes[(q1 + 2) % n], g)
+    if ld > 1:
+        _reverse_path(genes, w, n, g, before_g, f)
+    if lc > 1:
+        _reverse_path(genes, w, n, e, before_e, d)
+    if lb > 1:
+        _reverse_path(genes, w, n, c, before_c, b)
+    t = w.touched
+    t[0], t[1], t[2], t[3] = a, b, c, d
+    t[4], t[5], t[6], t[7] = e, f, g, h
+    return delta
+
+
+@njit(cache=True)
+def iterated_local_search(genes, length, data, aux, rng, kicks):
+    """``kicks`` rounds of: a local double-bridge kick, local search around it, and
+    keeping the result unless it is longer (else the logged flips are undone).
+    ``genes`` should be a local optimum; symmetric costs."""
+    n = length
+    if n < 8:
+        return exact_local_search(genes, length, data, aux)
+    w = _work(genes, n)
+    saved = genes[:n].copy()  # a tour as short as the current one, for a log overflow
+    cost = tour_cost(genes, n, data, aux)
+    for _ in range(kicks):
+        w.state[2] = 0
+        w.state[3] = 0
+        delta = _double_bridge_kick(genes, w, n, data, rng, KICK_SPAN)
+        for k in range(8):
+            _push(w.queue, w.queued, w.state, n, w.touched[k])
+        gain = _polish(genes, n, data, aux, w, True)
+        new = cost + delta - gain
+        if new < cost - 1e-12 * abs(cost):
+            cost = new
+            saved[:] = genes[:n]
+        elif new > cost + 1e-12 * abs(cost) and not _undo(genes, w, n):
+            genes[:n] = saved
+            for i in range(n):
+                w.pos[genes[i]] = i
     return n
 
 
 @njit(cache=True)
 def kicked_best_polished(genes, data, aux, rng, best, best_len):
-    """:func:`kicked_best`, then local search around what changed.
-
-    A nearest-neighbour tour is polished everywhere; a double-bridge kick only
-    around the eight cities at its three junctions and the wrap-around.
-    """
-    n = kicked_best(genes, data, aux, rng, best, best_len)
-    if best_len == 0 or n < 8 or not _differs(genes, best, n):
+    """A restart individual for symmetric costs: a polished randomised nearest-neighbour
+    tour (before any best, and a ``grasp_share`` of the time), else an iterated local
+    search of ``aux.kicks`` close kicks from the best tour."""
+    n = data.shape[0]
+    if best_len == 0 or rng.random() < aux.grasp_share:
+        nearest_neighbour_tour(genes, data, aux, rng)
         return local_search(genes, n, data, aux)
-    pos = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        pos[best[i]] = i
-    active = np.empty(n, dtype=np.int64)
-    m = 0
-    for i in range(n):  # cities whose successor changed, and those successors
-        a = genes[i]
-        b = genes[(i + 1) % n]
-        if best[(pos[a] + 1) % n] != b and best[(pos[b] + 1) % n] != a:
-            active[m] = a
-            active[m + 1] = b
-            m += 2
-            if m + 2 > n:
-                break
-    return local_search_around(genes, n, data, aux, active, m)
-
-
-@njit(cache=True)
-def _differs(a, b, n):
-    for i in range(n):
-        if a[i] != b[i]:
-            return True
-    return False
+    genes[:n] = best[:n]
+    return iterated_local_search(genes, n, data, aux, rng, max(1, aux.kicks))
 
 
 @njit(cache=True)
 def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
-    """:func:`greedy_crossover`, then local search around the edges neither parent has."""
+    """:func:`greedy_crossover`, local search around the edges neither parent has,
+    then an iterated local search of ``aux.kicks`` kicks. A child longer than the
+    better parent is replaced by that parent (before the iterated search), so
+    children never fall behind their parents."""
     n = greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
     succ_a = np.empty(n, dtype=np.int64)
     succ_b = np.empty(n, dtype=np.int64)
@@ -556,15 +893,22 @@ def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, ch
             active[m] = u
             active[m + 1] = v
             m += 2
-    if m == 0:
-        return n
-    return local_search_around(child, n, data, aux, active, m)
+    if m > 0:
+        local_search_around(child, n, data, aux, active, m)
+    cost_a = tour_cost(genes_a, n, data, aux)
+    cost_b = tour_cost(genes_b, n, data, aux)
+    better = genes_a if cost_a <= cost_b else genes_b
+    if tour_cost(child, n, data, aux) > min(cost_a, cost_b):
+        child[:n] = better[:n]
+    if n >= 8 and aux.kicks > 0:
+        iterated_local_search(child, n, data, aux, rng, aux.kicks)
+    return n
 
 
 @njit(cache=True, inline="always")
 def randomize(genes, data, aux, rng, best, best_len):
-    """A new tour for the initial population or a restart, as ``aux[AUX_SEARCH]`` says."""
-    search = aux[AUX_SEARCH]
+    """A new tour for the initial population or a restart, as ``aux.search`` says."""
+    search = aux.search
     if search == SEARCH_FAST:
         return kicked_best_polished(genes, data, aux, rng, best, best_len)
     if search == SEARCH_EXACT:
@@ -575,15 +919,15 @@ def randomize(genes, data, aux, rng, best, best_len):
 @njit(cache=True, inline="always")
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     """Greedy crossover; polished around the new edges when searching fast."""
-    if aux[AUX_SEARCH] == SEARCH_FAST:
+    if aux.search == SEARCH_FAST:
         return greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
     return greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
 
 
 @njit(cache=True, inline="always")
 def improve(genes, length, data, aux):
-    """The exact full-sweep local search when searching exactly; else nothing
+    """The asymmetric local search when searching exactly; else nothing
     (the fast search polishes inside crossover and randomize)."""
-    if aux[AUX_SEARCH] == SEARCH_EXACT:
-        return exact_local_search(genes, length, data, aux)
+    if aux.search == SEARCH_EXACT:
+        return asymmetric_local_search(genes, length, data, aux)
     return length

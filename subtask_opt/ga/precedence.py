@@ -20,9 +20,8 @@ infeasible tour (:func:`tour_cost` still returns ``inf`` for one, as a guard):
 
 ``data`` is the (N, N) cost matrix (asymmetric allowed; the return leg to the
 first node is an ordinary leg, so open paths are zero-cost returns, see
-:mod:`subtask_opt.arm.constraints`). ``aux`` is a float64 array built by
-:func:`make_pinned_aux` and read back only by :func:`unpack` (a header of
-counts, then the predecessor and successor lists in CSR form).
+:mod:`subtask_opt.arm.constraints`). ``aux`` is a :class:`PinnedAux` built by
+:func:`make_pinned_aux`: the pins and the predecessor and successor lists in CSR form.
 """
 
 from __future__ import annotations
@@ -35,7 +34,6 @@ from numba import njit
 from subtask_opt.ga.dispatch import OperatorSet, register
 from subtask_opt.ga.kinds import Kind
 
-_HEADER = 4  # n, first, last, number of pairs
 MAX_SEGMENT = 8
 """The longest run of nodes Or-opt moves (segment moves of this length cover the
 orientation-keeping 3-opt moves that matter on asymmetric costs)."""
@@ -52,13 +50,12 @@ class PinnedAux(NamedTuple):
     succ_idx: np.ndarray
 
 
-def make_pinned_aux(n: int, first: int, last: int, pairs: np.ndarray) -> np.ndarray:
-    """The ``aux`` array of this kind: pins and the (P, 2) pairs ``a`` before ``b``."""
+def make_pinned_aux(n: int, first: int, last: int, pairs: np.ndarray) -> PinnedAux:
+    """The ``aux`` of this kind: the pins and the (P, 2) pairs ``a`` before ``b`` as CSR lists."""
     p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     pred_ptr, pred_idx = _csr(n, p[:, 1], p[:, 0])
     succ_ptr, succ_idx = _csr(n, p[:, 0], p[:, 1])
-    head = np.array([n, first, last, len(p)], dtype=np.float64)
-    return np.concatenate([head, pred_ptr, pred_idx, succ_ptr, succ_idx]).astype(np.float64)
+    return PinnedAux(int(first), int(last), pred_ptr, pred_idx, succ_ptr, succ_idx)
 
 
 def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -66,22 +63,6 @@ def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.nda
     ptr = np.zeros(n + 1, dtype=np.int64)
     np.add.at(ptr, rows + 1, 1)
     return np.cumsum(ptr), cols[order]
-
-
-@njit(cache=True)
-def unpack(aux):
-    """The :class:`PinnedAux` stored in ``aux`` (see :func:`make_pinned_aux`)."""
-    n = int(aux[0])
-    m = int(aux[3])
-    o = _HEADER
-    pred_ptr = aux[o:o + n + 1].astype(np.int64)
-    o += n + 1
-    pred_idx = aux[o:o + m].astype(np.int64)
-    o += m
-    succ_ptr = aux[o:o + n + 1].astype(np.int64)
-    o += n + 1
-    succ_idx = aux[o:o + m].astype(np.int64)
-    return PinnedAux(int(aux[1]), int(aux[2]), pred_ptr, pred_idx, succ_ptr, succ_idx)
 
 
 @njit(cache=True)
@@ -103,7 +84,7 @@ def feasible(genes, a):
 @njit(cache=True)
 def tour_cost(genes, length, data, aux):
     """Closed-tour cost of ``genes``; ``inf`` if it breaks a pin or a pair."""
-    a = unpack(aux)
+    a = aux
     if not feasible(genes[:length], a):
         return np.inf
     total = 0.0
@@ -203,7 +184,7 @@ def _build(out, data, a, rng, mode, pa, pb, priority):
 @njit(cache=True)
 def repair(genes, aux):
     """In place: the feasible tour closest to ``genes`` in relative order (see module doc)."""
-    a = unpack(aux)
+    a = aux
     n = genes.shape[0]
     priority = np.empty(n, dtype=np.int64)
     for k in range(n):
@@ -215,7 +196,7 @@ def repair(genes, aux):
 @njit(cache=True)
 def randomize(genes, data, aux, rng, best, best_len):
     """A new feasible tour: random or near-greedy, or (restart) a repaired kick of ``best``."""
-    a = unpack(aux)
+    a = aux
     n = data.shape[0]
     out = genes[:n]
     empty = np.empty(0, dtype=np.int64)
@@ -253,7 +234,7 @@ def randomize(genes, data, aux, rng, best, best_len):
 @njit(cache=True)
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     """Greedy crossover under precedence (see the module doc); always feasible."""
-    a = unpack(aux)
+    a = aux
     n = len_a
     _build(child[:n], data, a, rng, _CROSS, genes_a[:n], genes_b[:n], np.empty(0, np.int64))
     return n
@@ -441,7 +422,7 @@ def _swap(t, data, a, pos):
 @njit(cache=True)
 def local_search(genes, length, data, aux):
     """2-opt, Or-opt and node exchanges under the pins and the pairs until none improves."""
-    a = unpack(aux)
+    a = aux
     t = genes[:length]
     n = length
     pos = np.empty(n, dtype=np.int64)

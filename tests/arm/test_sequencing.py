@@ -175,3 +175,19 @@ def test_no_bound_above_the_size_limit(arm):
     problem = SequencingProblem(random_subtasks(arm, 12, seed=1), arm, time_model="trapezoid")
     result = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0))
     assert result.lower_bound is None and result.gap_bound is None
+
+
+@pytest.mark.parametrize(("robot", "model", "n", "seed"), [
+    ("planar_2r", "trapezoid", 40, 0), ("asr_twodof", "joint", 40, 1),
+    ("asr_twodof", "trapezoid", 60, 2), ("planar_2r", "joint", 60, 3),
+])
+def test_default_settings_reach_the_certified_optimum_of_new_40_and_60_subtask_sets(
+        robot, model, n, seed):
+    # held-out sets (not the built-in cases the defaults were tuned on); the MILP
+    # certifies the optimum of the fixed-configuration matrix
+    arm = load_arm(robot)
+    problem = SequencingProblem(random_subtasks(arm, n, seed=1000 + seed), arm, time_model=model,
+                                configurations="fixed")
+    optimum, _ = milp_optimum(problem.matrix)
+    result = solve(problem, seed=seed)
+    assert result.total_time == pytest.approx(optimum, rel=1e-9)

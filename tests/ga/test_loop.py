@@ -56,8 +56,9 @@ def test_history_is_monotone_and_complete():
 def test_no_improvement_stops_exactly_k_generations_after_the_last_gain():
     out = _run(search=SEARCH_FAST, criteria=[NoImprovement(7), MaxGenerations(10_000)])
     h = out.history
-    last_gain = max([0] + [g + 1 for g in range(1, h.generations)
-                           if h.best_cost[g] < h.best_cost[g - 1]])
+    # best before each generation: the initial population's, then each generation's
+    before = np.concatenate([[h.initial_best], h.best_cost[:-1]])
+    last_gain = max([0] + [g + 1 for g in range(h.generations) if h.best_cost[g] < before[g]])
     assert out.generations == last_gain + 7
 
 

@@ -7,7 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from subtask_opt.base.errors import ParameterError
 from subtask_opt.ga.permutation import (
+    SEARCH_EXACT,
+    SEARCH_FAST,
     exact_local_search,
     greedy_crossover,
     greedy_crossover_polished,
@@ -170,3 +173,144 @@ def test_partial_neighbour_table_equals_the_stable_full_sort(seed):
                       kind="stable")[:, :-1]
     for k in (1, 3, 8, n - 1):
         np.testing.assert_array_equal(neighbour_table(m, k), full[:, :min(k, n - 1)])
+
+
+def _work_on(tour: np.ndarray):
+    from subtask_opt.ga.permutation import _work
+
+    return _work(tour, len(tour))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 40), k=st.integers(1, 12))
+def test_three_opt_move_gain_is_the_cost_change(seed, n, k):
+    from subtask_opt.ga.permutation import _three_opt_move
+
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=k)
+    tour = rng.permutation(n).astype(np.int64)
+    w = _work_on(tour)
+    for _ in range(30):
+        before = m[tour, np.roll(tour, -1)].sum()
+        gain = _three_opt_move(int(rng.integers(0, n)), tour, w, n, m, aux.neighbours)
+        after = m[tour, np.roll(tour, -1)].sum()
+        assert _is_permutation(tour, n)
+        np.testing.assert_array_equal(w.pos[tour], np.arange(n))
+        assert gain >= 0.0
+        assert before - after == pytest.approx(gain, abs=1e-9)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 40), span=st.integers(1, 15))
+def test_kicks_and_or_opt_moves_report_their_cost_change_and_are_undone(seed, n, span):
+    from subtask_opt.ga.permutation import _double_bridge_kick, _or_opt_move, _undo
+
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True)
+    tour = rng.permutation(n).astype(np.int64)
+    start = tour.copy()
+    w = _work_on(tour)
+    w.state[2:] = 0
+    cost = m[tour, np.roll(tour, -1)].sum()
+    for step in range(10):
+        if step % 2 == 0:
+            change = _double_bridge_kick(tour, w, n, m, rng, span)
+        else:
+            change = -_or_opt_move(int(rng.integers(0, n)), tour, w, n, m, aux.neighbours, 3,
+                                   True)
+        new = m[tour, np.roll(tour, -1)].sum()
+        assert _is_permutation(tour, n)
+        assert new - cost == pytest.approx(change, abs=1e-9)
+        cost = new
+    assert _undo(tour, w, n)
+    np.testing.assert_array_equal(tour, start)
+    np.testing.assert_array_equal(w.pos[tour], np.arange(n))
+
+
+def test_a_double_bridge_kick_changes_three_or_four_edges():
+    # four in general; three when the first two segments are single cities (a swap)
+    from subtask_opt.ga.permutation import _double_bridge_kick
+
+    n = 30
+    m = _points_matrix(1, n)
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        tour = np.arange(n, dtype=np.int64)
+        _double_bridge_kick(tour, _work_on(tour), n, m, rng, 5)
+        old = {frozenset((i, (i + 1) % n)) for i in range(n)}
+        new = {frozenset((int(tour[i]), int(tour[(i + 1) % n]))) for i in range(n)}
+        assert len(new - old) in (3, 4)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 60))
+def test_iterated_local_search_never_worsens_and_repeats_with_a_seed(seed, n):
+    from subtask_opt.ga.permutation import iterated_local_search
+
+    m = _points_matrix(seed, n)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, search=SEARCH_FAST)
+    tour = np.random.default_rng(seed).permutation(n).astype(np.int64)
+    local_search(tour, n, m, aux)
+    before = tour_cost(tour, n, m, aux)
+    runs = []
+    for _ in range(2):
+        t = tour.copy()
+        iterated_local_search(t, n, m, aux, np.random.default_rng(seed), 50)
+        assert _is_permutation(t, n)
+        assert tour_cost(t, n, m, aux) <= before + 1e-9
+        runs.append(t)
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
+def _brute_force(m: np.ndarray) -> float:
+    from itertools import permutations
+
+    n = len(m)
+    return min(m[(0, *p), (*p, 0)].sum() for p in permutations(range(1, n)))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_iterated_local_search_finds_the_brute_force_optimum_of_small_tours(seed):
+    from subtask_opt.ga.permutation import iterated_local_search
+
+    n = 9
+    m = _points_matrix(100 + seed, n)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, search=SEARCH_FAST)
+    tour = np.random.default_rng(seed).permutation(n).astype(np.int64)
+    local_search(tour, n, m, aux)
+    iterated_local_search(tour, n, m, aux, np.random.default_rng(seed), 300)
+    assert tour_cost(tour, n, m, aux) == pytest.approx(_brute_force(m), rel=1e-12)
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(5, 14))
+def test_asymmetric_local_search_reaches_a_two_opt_and_or_opt_optimum(seed, n):
+    from subtask_opt.ga.permutation import asymmetric_local_search
+
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n) + rng.random((n, n))
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, search=SEARCH_EXACT)
+    tour = rng.permutation(n).astype(np.int64)
+    before = tour_cost(tour, n, m, aux)
+    asymmetric_local_search(tour, n, m, aux)
+    assert _is_permutation(tour, n)
+    assert tour_cost(tour, n, m, aux) <= before + 1e-12
+    assert not _two_opt_improvable(tour, m)
+    assert not _or_opt_improvable(tour, m, min(3, n - 3))
+
+
+def test_make_aux_rejects_bad_values():
+    m = _points_matrix(0, 6)
+    with pytest.raises(ParameterError, match="search"):
+        make_aux(neighbour_table(m), nearest_fallback=True, search=7)
+    with pytest.raises(ParameterError, match="kicks"):
+        make_aux(neighbour_table(m), nearest_fallback=True, kicks=-1)
+
+
+def test_make_aux_holds_the_neighbour_table_as_integers():
+    m = _points_matrix(0, 10)
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=4)
+    assert aux.neighbours.dtype == np.int64 and aux.neighbours.shape == (10, 4)
+    np.testing.assert_array_equal(aux.neighbours, neighbour_table(m, 4))
