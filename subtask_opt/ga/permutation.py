@@ -100,9 +100,15 @@ def neighbour_table(matrix: np.ndarray, k: int | None = None) -> np.ndarray:
 
 def default_kicks(n: int) -> int:
     """Kicks of the iterated local search per restart individual and child for ``n``
-    cities: one per ten cities, at least 10 and at most 100 (a generation then costs
-    about as much as the polish of its children, and the default stop stays quick)."""
-    return int(min(100, max(10, n // 10)))
+    cities: none below :data:`KICKS_FROM` cities (the polished micro-GA alone reaches
+    the optimum there in milliseconds, and kicks would cost 10x that), then one per ten
+    cities, at most 100 (a generation then costs about as much as the polish of its
+    children, and the default stop stays quick)."""
+    return 0 if n < KICKS_FROM else int(min(100, n // 10))
+
+
+KICKS_FROM = 100
+"""Fewest cities for which :func:`default_kicks` turns the iterated local search on."""
 
 
 def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 0.25,
