@@ -30,9 +30,10 @@ from tests.conftest import SHARED_DATA
 TWO_PI = 2 * math.pi
 
 # A spherical-wrist arm with every offset the closed form claims to handle: a tilted
-# base, a shoulder offset, lateral offsets along the shoulder axis, an elbow offset,
-# joint 3 turning the other way from joint 2, a forearm axis along x, a tool offset
-# and joint 6 with a range over 2 pi.
+# base, a shoulder offset, a shoulder axis not perpendicular to axis 1 (rolled 0.2 rad),
+# lateral offsets along the shoulder axis, an elbow offset, joint 3 turning the other
+# way from joint 2, a forearm axis along x, a tool offset and joint 6 with a range over
+# 2 pi.
 _OFFSET_URDF = """<?xml version="1.0"?>
 <robot name="offset6r">
   <link name="base"/><link name="l1"/><link name="l2"/><link name="l3"/>
@@ -41,7 +42,7 @@ _OFFSET_URDF = """<?xml version="1.0"?>
     <origin xyz="0.02 -0.01 0.4" rpy="0.1 -0.2 0.3"/><axis xyz="0 0 1"/>
     <limit lower="-3.0" upper="3.0" velocity="2" effort="1"/></joint>
   <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
-    <origin xyz="0.025 0.05 0.0" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <origin xyz="0.025 0.05 0.0" rpy="0.2 0 0"/><axis xyz="0 1 0"/>
     <limit lower="-2.5" upper="2.5" velocity="2" effort="1"/></joint>
   <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
     <origin xyz="0 -0.03 0.455" rpy="0 0 0"/><axis xyz="0 -1 0"/>
@@ -309,3 +310,20 @@ def test_shoulder_singularity_returns_solutions_that_reach_the_pose():
     for q in canon:
         dp, dr = _fk_error(arm, q, pose)
         assert dp < 1e-6 and dr < 1e-6
+
+
+@pytest.mark.fuzz
+def test_fuzz_spherical_closed_form_contains_the_generating_configuration(offset_arm):
+    import os
+
+    rng = np.random.default_rng(int(os.environ.get("FUZZ_SEED", "0")))
+    for arm in (_arm("vs060_drill"), offset_arm):
+        solver = IKSolver(arm)
+        for _ in range(int(os.environ.get("FUZZ_EXAMPLES", "200"))):
+            q_true = rng.uniform(arm.limits.lower, arm.limits.upper)
+            pose = arm.fk(q_true)
+            full = solver.solve(pose)
+            assert np.abs(full - q_true).max(axis=1).min() < 1e-6
+            for q in full:
+                dp, dr = _fk_error(arm, q, pose)
+                assert dp < 1e-6 and dr < 1e-6
