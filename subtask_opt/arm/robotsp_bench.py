@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError
+from subtask_opt.base.errors import InputDataError, ParameterError
 
 PEERS = ("robotsp", "tsp_cspace", "elkai_gtsp")
 HOME_DEG = (0.0, -20.0, 130.0, 0.0, 70.0, 0.0)
@@ -144,7 +144,11 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             extra = time.process_time() - m0
             order, choice = fn(layers, home, manip, leg_time)
         else:
-            order, choice = fn(layers, home, leg_time, seed=seed)
+            try:
+                order, choice = fn(layers, home, leg_time, seed=seed)
+            except ParameterError as exc:  # e.g. past the GTSP peer's node cap
+                out["methods"][name] = {"unavailable": str(exc)}
+                continue
         search = time.process_time() - c0 - extra
         cpu = {"ik": problem.cpu["ik"], "collision": problem.cpu["collision"],
                "matrix": problem.cpu["matrix"] + extra, "search": search}

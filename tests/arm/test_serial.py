@@ -15,6 +15,7 @@ from subtask_opt.arm.serial import (
     SerialLimits,
     load_serial_arm,
     pose_error,
+    robots_dir,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
 
@@ -121,8 +122,11 @@ def test_limits_from_arguments_replace_the_files():
         load_serial_arm("ur5", limits={"acceleration": [1, 2]})
 
 
-def test_missing_acceleration_is_named_when_required():
-    arm = load_serial_arm("ur5")
+def test_missing_acceleration_is_named_when_required(tmp_path):
+    # a URDF with no limits file beside it: URDF cannot hold acceleration limits
+    urdf = tmp_path / "bare.urdf"
+    urdf.write_text((robots_dir() / "vs060_drill.urdf").read_text())
+    arm = load_serial_arm(urdf)
     assert arm.limits.acceleration is None
     with pytest.raises(InputDataError, match='"acceleration"'):
         arm.limits.require("acceleration")
