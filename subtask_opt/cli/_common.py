@@ -164,6 +164,11 @@ def animation_output(text: str) -> str:
     return _output(text, ANIMATION_SUFFIXES)
 
 
+def html_output(text: str) -> str:
+    """A path for an HTML page (``--view``)."""
+    return _output(text, (".html",))
+
+
 def add_outputs(parser: argparse.ArgumentParser, *, what: str = "the result",
                 plot: str | None = "a figure of the result") -> None:
     """``--json OUT`` and (unless ``plot`` is None) ``--plot OUT.png``."""

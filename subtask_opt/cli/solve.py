@@ -19,6 +19,7 @@ from subtask_opt.cli._common import (
     animation_output,
     float_in,
     floats,
+    html_output,
     json_output,
     non_negative_int,
     refuse_overwriting_inputs,
@@ -228,7 +229,7 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, trajectory: Any) -
 
 # ---------------------------------------------------------------- serial arms (6-/7-DOF)
 
-_SERIAL_FLAGS = ("scene", "standoff", "axis_step", "tool_frame", "limits")
+_SERIAL_FLAGS = ("view", "scene", "standoff", "axis_step", "tool_frame", "limits")
 
 
 def _add_serial_options(p: argparse.ArgumentParser) -> None:
@@ -246,6 +247,8 @@ def _add_serial_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--tool-frame", metavar="FRAME", help="tool frame (default: the robot's)")
     g.add_argument("--limits", metavar="NAME|FILE.json",
                    help="a named limit set of the robot or a JSON file of per-joint limits")
+    g.add_argument("--view", metavar="OUT.html", type=html_output,
+                   help="write the executed tour as an offline 3-D HTML animation")
 
 
 def _signed_numbers(text: str) -> tuple[float, ...]:
@@ -293,7 +296,9 @@ def _run_serial(args: argparse.Namespace) -> int:
         raise ParameterError(f"--time-model {args.time_model}: serial arms use the joint "
                              "model only")
     refuse_overwriting_inputs([args.case, args.robot, args.scene, args.limits],
-                              [args.json, args.trajectory])
+                              [args.json, args.trajectory, args.plot, args.view])
+    if args.animate:
+        raise ParameterError("--animate draws the planar arm; use --view OUT.html for a serial arm")
     problem = serial_problem_from_files(
         args.robot, args.case, scene=args.scene, home_deg=args.home,
         standoff=0.0 if args.standoff is None else args.standoff,
@@ -323,4 +328,28 @@ def _run_serial(args: argparse.Namespace) -> int:
     if args.trajectory:
         trajectory.to_csv(args.trajectory, args.dt)
         print(f"wrote {args.trajectory}")
+    if args.plot or args.view:
+        _serial_figures(args, problem, result, trajectory)
     return EXIT_OK
+
+
+def _serial_figures(args: argparse.Namespace, problem: Any, result: Any, trajectory: Any) -> None:
+    """``--plot`` (targets, tool path, time per leg) and ``--view`` (3-D HTML animation)."""
+    times = trajectory.sample_times(0.01)
+    q = trajectory.states(times)[0]
+    targets = problem.targets
+    title = (f"{problem.arm.name}: {len(targets)} targets from {args.case}, "
+             f"{result.total_time:.2f} s executed")
+    if args.plot:
+        from subtask_opt.plotting.serial import plot_serial_tour
+
+        plot_serial_tour(problem.arm, targets.points, trajectory.tool_positions(q),
+                         result.leg_times, result.order, args.plot, title=title,
+                         q_home=problem.home, scene=problem.scene)
+        print(f"wrote {args.plot}")
+    if args.view:
+        from subtask_opt.plotting.arm3d import write_tour_html
+
+        write_tour_html(args.view, problem.arm, times, q, targets=targets.points,
+                        axes=targets.axes, scene=problem.scene, order=result.order, title=title)
+        print(f"wrote {args.view}")

@@ -98,3 +98,30 @@ def test_bad_inputs_exit_2_with_one_line(files, capsys) -> None:
     argv = list(base)
     argv[argv.index("--time-model") + 1] = "paper"
     _bad(files, capsys, argv, "joint model only")
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "data"
+
+
+def test_shipped_panel_example_with_figure_and_view(tmp_path: Path, capsys) -> None:
+    """The README's serial-arm command on the shipped files, with --plot and --view."""
+    out = {k: tmp_path / f"out.{k}" for k in ("json", "csv", "png", "html")}
+    code = main(["solve", "--robot", "ur5", "--case", str(EXAMPLES / "ur5_panel.csv"),
+                 "--scene", str(EXAMPLES / "ur5_panel_scene.json"), "--home",
+                 "0,-90,90,-90,-90,0", "--standoff", "0.01", "--time-model", "joint",
+                 "--seed", "0", "--json", str(out["json"]), "--trajectory", str(out["csv"]),
+                 "--plot", str(out["png"]), "--view", str(out["html"])])
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    doc = json.loads(out["json"].read_text())
+    holes = (EXAMPLES / "ur5_panel.csv").read_text().strip().count("\n")  # rows after the header
+    assert sorted(doc["order"]) == list(range(holes))
+    assert doc["trajectory"]["valid"] is True
+    assert out["png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    page = out["html"].read_text()
+    assert "<script" in page and 'src="http' not in page  # self-contained: works offline
+
+
+@pytest.mark.parametrize("flag,value", [("--view", "out.htm"), ("--animate", "out.gif")])
+def test_serial_output_flags_refused_in_one_line(files, capsys, flag, value) -> None:
+    _bad(files, capsys, _base(files) + [flag, str(files["dir"] / value)], flag.lstrip("-"))
