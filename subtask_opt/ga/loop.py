@@ -231,7 +231,7 @@ def run_ga(
     kind: Kind,
     config: GAConfig,
     data: np.ndarray,
-    aux: np.ndarray,
+    aux: np.ndarray | tuple[object, ...],
     *,
     max_genes: int,
     seed: int,
@@ -250,7 +250,8 @@ def run_ga(
     require_int("run_ga", "max_genes", max_genes, 1)
     rng = np.random.default_rng(seed)
     data = np.ascontiguousarray(data, dtype=np.float64)
-    aux = np.ascontiguousarray(aux, dtype=np.float64)
+    if not isinstance(aux, tuple):  # a NamedTuple of parameters goes in as it is
+        aux = np.ascontiguousarray(aux, dtype=np.float64)
     params: LoopParams = config.loop_params()
     pop = np.zeros((config.population, max_genes), dtype=np.int64)
     lengths = np.zeros(config.population, dtype=np.int64)

@@ -15,6 +15,7 @@ from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 from subtask_opt.base.stop import MaxGenerations
+from tests.conftest import size
 
 _ARMS: dict = {}
 
@@ -91,7 +92,7 @@ def _ga_on_tensor(t: np.ndarray, seed: int) -> float:
 
 @pytest.mark.parametrize(("robot", "model", "n", "seed"), [
     ("planar_2r", "joint", 8, 0), ("asr_twodof", "joint", 8, 1),
-    ("planar_2r", "line", 7, 2), ("asr_twodof", "line", 8, 3),
+    ("planar_2r", "line", size(7, 4), 2), ("asr_twodof", "line", size(8, 4), 3),
 ])
 def test_joint_aware_solution_equals_brute_force(robot: str, model: str, n: int,
                                                  seed: int) -> None:
