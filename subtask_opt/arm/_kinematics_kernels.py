@@ -102,6 +102,16 @@ def scurve_time_nb(d: float, vmax: float, amax: float, jmax: float) -> float:
 
 
 @njit(cache=True)
+def unit_direction(x0: float, y0: float, x1: float, y1: float):
+    """``(d, ux, uy)``: the length of the segment (x0, y0) -> (x1, y1) (> 0) and its
+    unit direction."""
+    dx = x1 - x0
+    dy = y1 - y0
+    d = math.sqrt(dx * dx + dy * dy)
+    return d, dx / d, dy / d
+
+
+@njit(cache=True)
 def _fit_limits(q: float, lo: float, up: float) -> float:
     """Representative of q (mod 2 pi) inside [lo, up], or the wrapped q if none."""
     q = wrap_angle(q)
@@ -290,11 +300,7 @@ def leg_check(points: np.ndarray, q: np.ndarray, phi: np.ndarray, configs: np.nd
     for i in range(n):
         for j in range(i + 1, n):
             bad = configs[i] != configs[j]  # switching branch needs the singular rim
-            dx = points[j, 0] - points[i, 0]
-            dy = points[j, 1] - points[i, 1]
-            d = math.sqrt(dx * dx + dy * dy)
-            ux = dx / d
-            uy = dy / d
+            d, ux, uy = unit_direction(points[i, 0], points[i, 1], points[j, 0], points[j, 1])
             br = configs[i]
             # The radius along a line is convex: the point closest to the base
             # decides the inner disc and the elbow limit exactly.

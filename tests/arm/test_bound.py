@@ -18,7 +18,7 @@ from subtask_opt.arm.bound import (
 )
 from subtask_opt.arm.exact import held_karp, milp_optimum, tour_length
 from subtask_opt.base.errors import InputDataError, ParameterError
-from tests.conftest import size
+from tests.conftest import examples, size
 
 
 def _brute_force(m: np.ndarray) -> float:
@@ -43,13 +43,13 @@ def _matrices(draw, symmetric: bool):
     return m
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(_matrices(symmetric=True))
 def test_bound_below_brute_force_symmetric(m):
     assert lower_bound(m) <= _brute_force(m)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(_matrices(symmetric=False))
 def test_bound_below_brute_force_asymmetric(m):
     opt = _brute_force(m)

@@ -19,7 +19,7 @@ from subtask_opt.arm.sequencing import SequencingProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE, travel_times
 from subtask_opt.base.errors import NoPathError, ParameterError
-from tests.conftest import size
+from tests.conftest import examples, size
 
 _ARMS: dict = {}
 
@@ -121,7 +121,7 @@ def test_line_converges_with_the_grid() -> None:
     assert np.all(coarse[ok] >= fine[ok] * (1 - 1e-9))  # a coarser grid is more conservative
 
 
-@settings(max_examples=10, deadline=None)
+@settings(max_examples=examples(10, 3), deadline=None)
 @given(st.sampled_from(["planar_2r", "asr_twodof"]), st.integers(0, 10_000))
 def test_line_tensor_invariants(robot: str, seed: int) -> None:
     arm = _arm(robot)

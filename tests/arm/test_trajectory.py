@@ -34,8 +34,8 @@ def _solved(robot: str, case: str, model: str):
     arm = _arm(robot)
     configurations = "optimize" if model in ("joint", "line") else "fixed"
     subtasks = builtin_case(case, arm, seed=0)
-    if REDUCED:  # the first 8 subtasks of the case: the same kinds of legs, fewer of them
-        subtasks = SubtaskSet(subtasks.points[:8], name=subtasks.name)
+    if REDUCED:  # the first 5 subtasks of the case: the same kinds of legs, fewer of them
+        subtasks = SubtaskSet(subtasks.points[:5], name=subtasks.name)
     problem = SequencingProblem(subtasks, arm, time_model=model, configurations=configurations)
     return problem, solve(problem, seed=0)
 

@@ -47,7 +47,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.arm._kinematics_kernels import TWO_PI, ik_point
+from subtask_opt.arm._kinematics_kernels import TWO_PI, ik_point, unit_direction
 
 LINE_OK, LINE_ANNULUS, LINE_JOINT_LIMIT, LINE_SINGULAR = 0, 1, 2, 3
 # |sin(elbow angle)| below this is a singular configuration (the rim or the inner disc).
@@ -147,11 +147,7 @@ def line_geometry(kin, p0, p1, branch, q_start, q_end, m):
     """
     qs = np.zeros((m + 1, 2))
     der = np.zeros((m + 1, N_DER))
-    dx = p1[0] - p0[0]
-    dy = p1[1] - p0[1]
-    d = math.sqrt(dx * dx + dy * dy)
-    ux = dx / d
-    uy = dy / d
+    d, ux, uy = unit_direction(p0[0], p0[1], p1[0], p1[1])
     sg = path_grid(d, m)
     tmp = np.empty(2)
     # The distance to the base is convex along a line: its closest point decides
@@ -560,10 +556,8 @@ def line_profile(kin, p0, p1, branch, q_start, q_end, lim):
         return LINE_SINGULAR, sg, qs, x, w, 0.0, 1.0, np.inf
     if not lim.has_jerk:
         return LINE_OK, sg, qs, x, w, 0.0, 1.0, duration
-    dx = p1[0] - p0[0]
-    dy = p1[1] - p0[1]
-    d = math.sqrt(dx * dx + dy * dy)
-    tau, lam = _smoothing(kin, p0, dx / d, dy / d, branch, sg, qs, der, x, w, lim)
+    _, ux, uy = unit_direction(p0[0], p0[1], p1[0], p1[1])
+    tau, lam = _smoothing(kin, p0, ux, uy, branch, sg, qs, der, x, w, lim)
     return LINE_OK, sg, qs, x, w, tau, lam, lam * (duration + tau)
 
 
@@ -609,11 +603,7 @@ def line_states(kin, p0, p1, branch, sg, qs, x, w, tau, lam, t):
     :func:`line_profile`; t is clamped to [0, duration].
     """
     m = w.shape[0]
-    dx = p1[0] - p0[0]
-    dy = p1[1] - p0[1]
-    d = math.sqrt(dx * dx + dy * dy)
-    ux = dx / d
-    uy = dy / d
+    d, ux, uy = unit_direction(p0[0], p0[1], p1[0], p1[1])
     tk, sk = profile_knots(sg, x, w)
     end = tk[m] + tau
     n_t = t.shape[0]
