@@ -121,6 +121,13 @@ def _drop_skippable(genes, length, data):
 
 
 @njit(cache=True)
+def _free(data, x, y):
+    """Whether cell (x, y) is on the grid and free."""
+    h, w = data.shape
+    return 0 <= x < w and 0 <= y < h and data[y, x] == 0.0
+
+
+@njit(cache=True)
 def _random_free(data, rng):
     h, w = data.shape
     for _ in range(64):
@@ -273,7 +280,7 @@ def nonuniform_mutation(genes, length, data, aux, rng, strength):
         for _ in range(8):
             x = mx + rng.integers(-span // 3, span // 3 + 1)
             y = my + rng.integers(-span // 3, span // 3 + 1)
-            if 0 <= x < w and 0 <= y < h and data[y, x] == 0.0:
+            if _free(data, x, y):
                 for m in range(length, k + 1, -1):
                     genes[m] = genes[m - 1]
                 genes[k + 1] = y * w + x
@@ -297,7 +304,7 @@ def nonuniform_mutation(genes, length, data, aux, rng, strength):
             dy = rng.integers(-1, 2)
         x = x0 + dx
         y = y0 + dy
-        if 0 <= x < w and 0 <= y < h and data[y, x] == 0.0:
+        if _free(data, x, y):
             genes[k] = y * w + x
             break
     return length
@@ -324,9 +331,7 @@ def _nudge(genes, length, data, aux):
                 for dx in range(-1, 2):
                     x = x0 + dx
                     y = y0 + dy
-                    if (dx == 0 and dy == 0) or x < 0 or y < 0 or x >= w or y >= h:
-                        continue
-                    if data[y, x] != 0.0:
+                    if (dx == 0 and dy == 0) or not _free(data, x, y):
                         continue
                     c = y * w + x
                     cost = _segment_cost(data, aux, a, c) + _segment_cost(data, aux, c, b)
