@@ -128,11 +128,12 @@ def test_optimizing_is_never_worse_than_a_fixed_branch() -> None:
 
 def test_same_seed_same_configured_result() -> None:
     arm = _arm("asr_twodof")
-    problem = SequencingProblem(random_subtasks(arm, 25, seed=1), arm, time_model="line",
-                                configurations="optimize")
+    problem = SequencingProblem(random_subtasks(arm, size(25, 6), seed=1), arm,
+                                time_model="line", configurations="optimize")
+    gens = MaxGenerations(size(60, 15))
     for params in (SolverParams(), SolverParams.paper()):
-        a = solve(problem, seed=5, params=params, stop=MaxGenerations(60))
-        b = solve(problem, seed=5, params=params, stop=MaxGenerations(60))
+        a = solve(problem, seed=5, params=params, stop=gens)
+        b = solve(problem, seed=5, params=params, stop=gens)
         np.testing.assert_array_equal(a.order, b.order)
         np.testing.assert_array_equal(a.report.configurations, b.report.configurations)
         np.testing.assert_array_equal(a.history.best_cost, b.history.best_cost)
