@@ -60,9 +60,17 @@ lint: $(VENV)/.installed-dev
 	$(BIN)/ruff check subtask_opt tests benchmarks
 	$(BIN)/mypy subtask_opt
 
+# Kernels run as Python (NUMBA_DISABLE_JIT=1) so that they count; the slow tests then
+# take their reduced sizes (tests/conftest.py: size, examples). Everything the run
+# writes stays in .coverage/ (data, caches, temporary files) and htmlcov/ (the report).
+COV := $(CURDIR)/.coverage
 coverage: $(VENV)/.installed-dev
-	NUMBA_DISABLE_JIT=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --cov=subtask_opt \
-		--cov-report=term:skip-covered tests
+	rm -rf $(COV) htmlcov && mkdir -p $(COV)
+	NUMBA_DISABLE_JIT=1 MPLBACKEND=Agg PYTHONDONTWRITEBYTECODE=1 COVERAGE_FILE=$(COV)/data \
+	SUBTASK_OPT_CACHE_DIR=$(COV)/kernels HYPOTHESIS_STORAGE_DIRECTORY=$(COV)/hypothesis \
+	MPLCONFIGDIR=$(COV)/matplotlib $(BIN)/python -m pytest -n 2 -p no:cacheprovider \
+		--basetemp=$(COV)/tmp --cov=subtask_opt --cov-report=term:skip-covered \
+		--cov-report=html:htmlcov tests
 
 # make fuzz: every test marked fuzz with FUZZ_EXAMPLES examples each (readers x5/x10, CLI
 # options /10), 2,000 random grids and polygon worlds; prints and writes the input counts,
@@ -73,4 +81,5 @@ fuzz: $(VENV)/.installed-dev
 
 clean:
 	-[ -x $(BIN)/python ] && $(BIN)/python -m subtask_opt._kernel_cache --clear
-	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis .mypy_cache .ruff_cache .coverage
+	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis .mypy_cache .ruff_cache .coverage \
+		.coverage.* htmlcov

@@ -1,9 +1,18 @@
-"""Shared test fixtures: a headless matplotlib and the shared benchmark data."""
+"""Shared test fixtures: a headless matplotlib, the shared benchmark data, reduced sizes.
+
+Reduced sizes: ``make coverage`` runs the kernels as plain Python
+(``NUMBA_DISABLE_JIT=1``), which is 10 to 1000 times slower than compiled. Then
+:data:`REDUCED` is true and the slowest tests run smaller instances through
+:func:`size` and fewer Hypothesis examples through :func:`examples`; the lines
+they cover are the same, and ``make test`` (compiled kernels) keeps the full
+sizes.
+"""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TypeVar
 
 import pytest
 
@@ -13,6 +22,24 @@ pytest_plugins = ["tests.fuzz_report"]  # counts a fuzz run's inputs when FUZZ_R
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = PROJECT_ROOT.parent / "shared" / "data"
+
+REDUCED = os.environ.get("NUMBA_DISABLE_JIT", "0").strip() not in ("", "0")
+"""True when the kernels run as plain Python (the coverage run): use the reduced sizes."""
+
+_T = TypeVar("_T")
+
+
+def size(normal: _T, reduced: _T) -> _T:
+    """``normal`` in the ordinary test run, ``reduced`` when the kernels run as Python."""
+    return reduced if REDUCED else normal
+
+
+def examples(normal: int, reduced: int | None = None) -> int:
+    """Hypothesis ``max_examples``: ``normal``, or ``reduced`` (default a fifth, at least 3)
+    when the kernels run as Python."""
+    if not REDUCED:
+        return normal
+    return reduced if reduced is not None else max(3, normal // 5)
 
 
 @pytest.fixture(scope="session")

@@ -3,8 +3,8 @@
 Arrays and scalars in, arrays out; the Python wrappers in :mod:`subtask_opt.arm.model`
 and :mod:`subtask_opt.arm.timing.models` validate the inputs and unpack the objects.
 
-The arm enters every kernel as the float64 vector ``kin`` built by
-:attr:`subtask_opt.arm.model.Arm.kinematics` (layout given by the ``K_*`` indices).
+The arm enters every kernel as ``kin``, the :class:`ArmKinematics` named tuple
+built by :attr:`subtask_opt.arm.model.Arm.kinematics` (numba caches it by its field types).
 With the geometric angles ``t1 = a1 + s1*q1`` (upper arm direction) and
 ``b = a2 + s2*q2`` (elbow angle, upper arm to forearm), the tip is::
 
@@ -19,14 +19,38 @@ at the tip, the elbow lies on the clockwise (right-hand) side; branch 1
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-# Layout of the ``kin`` vector (indices, not tuning values).
-K_BX, K_BY, K_L1, K_L2, K_A1, K_A2, K_S1, K_S2, K_PHI = 0, 1, 2, 3, 4, 5, 6, 7, 8
-K_LO1, K_LO2, K_UP1, K_UP2 = 9, 10, 11, 12
-KIN_SIZE = 13
+
+class ArmKinematics(NamedTuple):
+    """Geometry and joint limits of a planar 2R arm, as the kernels take them (floats)."""
+
+    base_x: float
+    """Shoulder position in the plane (m)."""
+    base_y: float
+    l1: float
+    """Upper arm length (m)."""
+    l2: float
+    """Forearm length (m)."""
+    a1: float
+    """Geometric angle of the upper arm at q1 = 0 (rad)."""
+    a2: float
+    """Geometric elbow angle (upper arm to forearm) at q2 = 0 (rad)."""
+    s1: float
+    """+1 if joint 1 turns counter-clockwise seen from +z, else -1."""
+    s2: float
+    """The same for joint 2."""
+    phi_offset: float
+    """Tool angle minus the forearm direction (rad)."""
+    lower1: float
+    """Joint position limits (rad)."""
+    lower2: float
+    upper1: float
+    upper2: float
+
 
 TWO_PI = 2.0 * math.pi
 # Slack on |cos b| <= 1 and on joint limits, so points exactly on the rim or a
@@ -78,6 +102,16 @@ def scurve_time_nb(d: float, vmax: float, amax: float, jmax: float) -> float:
 
 
 @njit(cache=True)
+def unit_direction(x0: float, y0: float, x1: float, y1: float):
+    """``(d, ux, uy)``: the length of the segment (x0, y0) -> (x1, y1) (> 0) and its
+    unit direction."""
+    dx = x1 - x0
+    dy = y1 - y0
+    d = math.sqrt(dx * dx + dy * dy)
+    return d, dx / d, dy / d
+
+
+@njit(cache=True)
 def _fit_limits(q: float, lo: float, up: float) -> float:
     """Representative of q (mod 2 pi) inside [lo, up], or the wrapped q if none."""
     q = wrap_angle(q)
@@ -94,17 +128,17 @@ def _within(q: float, lo: float, up: float) -> bool:
 
 
 @njit(cache=True)
-def ik_point(kin: np.ndarray, x: float, y: float, branch: int, out: np.ndarray) -> int:
+def ik_point(kin: ArmKinematics, x: float, y: float, branch: int, out: np.ndarray) -> int:
     """Analytic IK of one point on one branch into ``out`` (2,).
 
     Returns 0 if feasible, 1 if the point is outside the annulus, 2 if the
     branch breaks joint 1's limit, 3 joint 2's (``out`` still holds the
     closest representatives then).
     """
-    dx = x - kin[K_BX]
-    dy = y - kin[K_BY]
-    l1 = kin[K_L1]
-    l2 = kin[K_L2]
+    dx = x - kin.base_x
+    dy = y - kin.base_y
+    l1 = kin.l1
+    l2 = kin.l2
     c = (dx * dx + dy * dy - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
     if c > 1.0 + _TOL or c < -1.0 - _TOL:
         out[0] = np.nan
@@ -116,19 +150,19 @@ def ik_point(kin: np.ndarray, x: float, y: float, branch: int, out: np.ndarray) 
         s = -s
     b = math.atan2(s, c)
     t1 = math.atan2(dy, dx) - math.atan2(l2 * s, l1 + l2 * c)
-    q1 = _fit_limits(kin[K_S1] * (t1 - kin[K_A1]), kin[K_LO1], kin[K_UP1])
-    q2 = _fit_limits(kin[K_S2] * (b - kin[K_A2]), kin[K_LO2], kin[K_UP2])
+    q1 = _fit_limits(kin.s1 * (t1 - kin.a1), kin.lower1, kin.upper1)
+    q2 = _fit_limits(kin.s2 * (b - kin.a2), kin.lower2, kin.upper2)
     out[0] = q1
     out[1] = q2
-    if not _within(q1, kin[K_LO1], kin[K_UP1]):
+    if not _within(q1, kin.lower1, kin.upper1):
         return 2
-    if not _within(q2, kin[K_LO2], kin[K_UP2]):
+    if not _within(q2, kin.lower2, kin.upper2):
         return 3
     return 0
 
 
 @njit(cache=True)
-def ik_batch(kin: np.ndarray, xy: np.ndarray, respect_limits: bool):
+def ik_batch(kin: ArmKinematics, xy: np.ndarray, respect_limits: bool):
     """IK of M points on both branches.
 
     Returns ``(q, status)``: q (M, 2, 2) with q[m, branch] the joint vector
@@ -153,34 +187,34 @@ def ik_batch(kin: np.ndarray, xy: np.ndarray, respect_limits: bool):
 
 
 @njit(cache=True)
-def fk_batch(kin: np.ndarray, q: np.ndarray) -> np.ndarray:
+def fk_batch(kin: ArmKinematics, q: np.ndarray) -> np.ndarray:
     """Analytic FK: q (M, 2) -> (M, 3) rows (x, y, tool angle in [-pi, pi))."""
     m = q.shape[0]
     out = np.empty((m, 3))
     for i in range(m):
-        t1 = kin[K_A1] + kin[K_S1] * q[i, 0]
-        t12 = t1 + kin[K_A2] + kin[K_S2] * q[i, 1]
-        out[i, 0] = kin[K_BX] + kin[K_L1] * math.cos(t1) + kin[K_L2] * math.cos(t12)
-        out[i, 1] = kin[K_BY] + kin[K_L1] * math.sin(t1) + kin[K_L2] * math.sin(t12)
-        out[i, 2] = wrap_angle(t12 + kin[K_PHI])
+        t1 = kin.a1 + kin.s1 * q[i, 0]
+        t12 = t1 + kin.a2 + kin.s2 * q[i, 1]
+        out[i, 0] = kin.base_x + kin.l1 * math.cos(t1) + kin.l2 * math.cos(t12)
+        out[i, 1] = kin.base_y + kin.l1 * math.sin(t1) + kin.l2 * math.sin(t12)
+        out[i, 2] = wrap_angle(t12 + kin.phi_offset)
     return out
 
 
 @njit(cache=True)
-def jacobian_point(kin: np.ndarray, q1: float, q2: float, out: np.ndarray) -> None:
+def jacobian_point(kin: ArmKinematics, q1: float, q2: float, out: np.ndarray) -> None:
     """Analytic 2x2 position Jacobian d(x, y)/d(q1, q2) into ``out``."""
-    t1 = kin[K_A1] + kin[K_S1] * q1
-    t12 = t1 + kin[K_A2] + kin[K_S2] * q2
-    l1 = kin[K_L1]
-    l2 = kin[K_L2]
-    out[0, 0] = kin[K_S1] * (-l1 * math.sin(t1) - l2 * math.sin(t12))
-    out[1, 0] = kin[K_S1] * (l1 * math.cos(t1) + l2 * math.cos(t12))
-    out[0, 1] = kin[K_S2] * (-l2 * math.sin(t12))
-    out[1, 1] = kin[K_S2] * (l2 * math.cos(t12))
+    t1 = kin.a1 + kin.s1 * q1
+    t12 = t1 + kin.a2 + kin.s2 * q2
+    l1 = kin.l1
+    l2 = kin.l2
+    out[0, 0] = kin.s1 * (-l1 * math.sin(t1) - l2 * math.sin(t12))
+    out[1, 0] = kin.s1 * (l1 * math.cos(t1) + l2 * math.cos(t12))
+    out[0, 1] = kin.s2 * (-l2 * math.sin(t12))
+    out[1, 1] = kin.s2 * (l2 * math.cos(t12))
 
 
 @njit(cache=True)
-def jacobian_batch(kin: np.ndarray, q: np.ndarray) -> np.ndarray:
+def jacobian_batch(kin: ArmKinematics, q: np.ndarray) -> np.ndarray:
     """Analytic Jacobians of q (M, 2) -> (M, 2, 2)."""
     out = np.empty((q.shape[0], 2, 2))
     for i in range(q.shape[0]):
@@ -189,13 +223,13 @@ def jacobian_batch(kin: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _tool_angle(kin: np.ndarray, q1: float, q2: float) -> float:
-    return wrap_angle(kin[K_A1] + kin[K_S1] * q1 + kin[K_A2] + kin[K_S2] * q2 + kin[K_PHI])
+def _tool_angle(kin: ArmKinematics, q1: float, q2: float) -> float:
+    return wrap_angle(kin.a1 + kin.s1 * q1 + kin.a2 + kin.s2 * q2 + kin.phi_offset)
 
 
 @njit(cache=True)
 def cartesian_matrix(points: np.ndarray, phi: np.ndarray, configs: np.ndarray,
-                     kin: np.ndarray, kv: float, ka: float, kw: float, kw_dot: float,
+                     kin: ArmKinematics, kv: float, ka: float, kw: float, kw_dot: float,
                      paper: bool, k: float, interpolate_phi: bool) -> np.ndarray:
     """N x N rest-to-rest times of the Cartesian models.
 
@@ -247,7 +281,7 @@ def cartesian_matrix(points: np.ndarray, phi: np.ndarray, configs: np.ndarray,
 
 @njit(cache=True)
 def leg_check(points: np.ndarray, q: np.ndarray, phi: np.ndarray, configs: np.ndarray,
-              kin: np.ndarray, vel: np.ndarray, kv: float, ka: float, kw: float,
+              kin: ArmKinematics, vel: np.ndarray, kv: float, ka: float, kw: float,
               kw_dot: float, n_samples: int):
     """Drive every straight leg with the synchronised Cartesian trapezoid and check the joints.
 
@@ -261,21 +295,17 @@ def leg_check(points: np.ndarray, q: np.ndarray, phi: np.ndarray, configs: np.nd
     ratio = np.zeros((n, n))
     qs = np.empty(2)
     jac = np.empty((2, 2))
-    lo = np.array([kin[K_LO1], kin[K_LO2]])
-    up = np.array([kin[K_UP1], kin[K_UP2]])
+    lo = np.array([kin.lower1, kin.lower2])
+    up = np.array([kin.upper1, kin.upper2])
     for i in range(n):
         for j in range(i + 1, n):
             bad = configs[i] != configs[j]  # switching branch needs the singular rim
-            dx = points[j, 0] - points[i, 0]
-            dy = points[j, 1] - points[i, 1]
-            d = math.sqrt(dx * dx + dy * dy)
-            ux = dx / d
-            uy = dy / d
+            d, ux, uy = unit_direction(points[i, 0], points[i, 1], points[j, 0], points[j, 1])
             br = configs[i]
             # The radius along a line is convex: the point closest to the base
             # decides the inner disc and the elbow limit exactly.
             if not bad:
-                s_c = (kin[K_BX] - points[i, 0]) * ux + (kin[K_BY] - points[i, 1]) * uy
+                s_c = (kin.base_x - points[i, 0]) * ux + (kin.base_y - points[i, 1]) * uy
                 if 0.0 < s_c < d:
                     if ik_point(kin, points[i, 0] + s_c * ux, points[i, 1] + s_c * uy,
                                 br, qs) != 0:

@@ -134,7 +134,8 @@ class Arm:
     (scratch), ``tip_frame_id``, ``link_lengths`` (L1, L2), ``base_xy``,
     ``joint_limits``, ``cartesian_limits``, ``axis_signs`` (+1 if a joint turns
     counter-clockwise seen from +z), ``angle_offsets`` (geometric angles a1, a2 at
-    q = 0), ``kinematics`` (the read-only vector the numba kernels take).
+    q = 0), ``kinematics`` (the :class:`~subtask_opt.arm._kinematics_kernels.ArmKinematics`
+    the numba kernels take).
     """
 
     def __init__(self, model: Any, tip_frame: str, joint_limits: JointLimits,
@@ -188,16 +189,11 @@ class Arm:
         self.base_xy.setflags(write=False)
         self.axis_signs = (signs[0], signs[1])
         self.angle_offsets = (a1, a2)
-        kin = np.zeros(_k.KIN_SIZE)
-        kin[_k.K_BX], kin[_k.K_BY] = p1
-        kin[_k.K_L1], kin[_k.K_L2] = l1, l2
-        kin[_k.K_A1], kin[_k.K_A2] = a1, a2
-        kin[_k.K_S1], kin[_k.K_S2] = signs
-        kin[_k.K_PHI] = _k.wrap_angle(phi0 - a1 - a2)
-        kin[_k.K_LO1], kin[_k.K_LO2] = joint_limits.lower
-        kin[_k.K_UP1], kin[_k.K_UP2] = joint_limits.upper
-        kin.setflags(write=False)
-        self.kinematics = kin
+        lo, up = joint_limits.lower, joint_limits.upper
+        self.kinematics = _k.ArmKinematics(
+            base_x=float(p1[0]), base_y=float(p1[1]), l1=l1, l2=l2, a1=a1, a2=a2,
+            s1=signs[0], s2=signs[1], phi_offset=_k.wrap_angle(phi0 - a1 - a2),
+            lower1=float(lo[0]), lower2=float(lo[1]), upper1=float(up[0]), upper2=float(up[1]))
 
     def _yaw(self, rot: np.ndarray) -> float:
         col = rot[:, self._yaw_column]

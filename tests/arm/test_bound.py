@@ -18,6 +18,7 @@ from subtask_opt.arm.bound import (
 )
 from subtask_opt.arm.exact import held_karp, milp_optimum, tour_length
 from subtask_opt.base.errors import InputDataError, ParameterError
+from tests.conftest import examples, size
 
 
 def _brute_force(m: np.ndarray) -> float:
@@ -42,13 +43,13 @@ def _matrices(draw, symmetric: bool):
     return m
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(_matrices(symmetric=True))
 def test_bound_below_brute_force_symmetric(m):
     assert lower_bound(m) <= _brute_force(m)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(_matrices(symmetric=False))
 def test_bound_below_brute_force_asymmetric(m):
     opt = _brute_force(m)
@@ -150,7 +151,7 @@ def test_more_iterations_never_lower(seed):
 
 
 def test_same_seed_same_bound_and_upper_is_used():
-    pts = np.random.default_rng(7).random((60, 2))
+    pts = np.random.default_rng(7).random((size(60, 20), 2))
     m = _euclidean(pts)
     assert lower_bound(m, seed=3) == lower_bound(m, seed=3)
     opt, _ = milp_optimum(m)
@@ -206,7 +207,7 @@ def test_bad_inputs():
 
 
 def test_time_limit_keeps_a_valid_bound_and_chunks_change_nothing():
-    pts = np.random.default_rng(11).random((80, 2))
+    pts = np.random.default_rng(11).random((size(80, 20), 2))
     m = _euclidean(pts)
     full = lower_bound(m)
     assert lower_bound(m, time_limit=1e6) == full  # chunked ascent, same path

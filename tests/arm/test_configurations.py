@@ -15,6 +15,7 @@ from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 from subtask_opt.base.stop import MaxGenerations
+from tests.conftest import size
 
 _ARMS: dict = {}
 
@@ -91,7 +92,7 @@ def _ga_on_tensor(t: np.ndarray, seed: int) -> float:
 
 @pytest.mark.parametrize(("robot", "model", "n", "seed"), [
     ("planar_2r", "joint", 8, 0), ("asr_twodof", "joint", 8, 1),
-    ("planar_2r", "line", 7, 2), ("asr_twodof", "line", 8, 3),
+    ("planar_2r", "line", size(7, 4), 2), ("asr_twodof", "line", size(8, 4), 3),
 ])
 def test_joint_aware_solution_equals_brute_force(robot: str, model: str, n: int,
                                                  seed: int) -> None:
@@ -127,11 +128,12 @@ def test_optimizing_is_never_worse_than_a_fixed_branch() -> None:
 
 def test_same_seed_same_configured_result() -> None:
     arm = _arm("asr_twodof")
-    problem = SequencingProblem(random_subtasks(arm, 25, seed=1), arm, time_model="line",
-                                configurations="optimize")
+    problem = SequencingProblem(random_subtasks(arm, size(25, 6), seed=1), arm,
+                                time_model="line", configurations="optimize")
+    gens = MaxGenerations(size(60, 15))
     for params in (SolverParams(), SolverParams.paper()):
-        a = solve(problem, seed=5, params=params, stop=MaxGenerations(60))
-        b = solve(problem, seed=5, params=params, stop=MaxGenerations(60))
+        a = solve(problem, seed=5, params=params, stop=gens)
+        b = solve(problem, seed=5, params=params, stop=gens)
         np.testing.assert_array_equal(a.order, b.order)
         np.testing.assert_array_equal(a.report.configurations, b.report.configurations)
         np.testing.assert_array_equal(a.history.best_cost, b.history.best_cost)

@@ -71,6 +71,21 @@ def test_builtin_geometry_from_the_model(arms: dict[str, Arm]) -> None:
     assert "planar_2r" in repr(ours)
 
 
+def test_kernel_parameters_are_a_named_tuple_of_the_arm(arms: dict[str, Arm]) -> None:
+    for arm in arms.values():
+        kin = arm.kinematics
+        assert isinstance(kin, _k.ArmKinematics)
+        assert all(type(v) is float for v in kin), kin  # one numba type per field
+        assert (kin.l1, kin.l2) == arm.link_lengths
+        assert (kin.base_x, kin.base_y) == tuple(arm.base_xy)
+        assert (kin.a1, kin.a2) == arm.angle_offsets and (kin.s1, kin.s2) == arm.axis_signs
+        assert [kin.lower1, kin.lower2] == arm.joint_limits.lower.tolist()
+        assert [kin.upper1, kin.upper2] == arm.joint_limits.upper.tolist()
+        # At q = 0 the tool angle is the forearm direction plus the offset.
+        expected_phi = _k.wrap_angle(kin.a1 + kin.a2 + kin.phi_offset)
+        assert _k.wrap_angle(arm.fk([0.0, 0.0])[2] - expected_phi) == pytest.approx(0, abs=1e-9)
+
+
 def test_custom_urdf_with_json_beside(tmp_path: Path) -> None:
     urdf = _custom_urdf(tmp_path)
     shutil.copy(ROBOTS_DIR / "planar_2r.json", tmp_path / "custom.json")

@@ -18,6 +18,7 @@ from subtask_opt import (
 from subtask_opt.arm.exact import held_karp, milp_optimum
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
+from tests.conftest import size
 
 
 def _euclidean(seed: int, n: int) -> np.ndarray:
@@ -88,8 +89,9 @@ def test_result_is_consistent(arm):
 def test_same_seed_same_result(arm):
     problem = SequencingProblem(builtin_case("random30", arm, seed=2), arm)
     for params in (SolverParams(), SolverParams.paper()):
-        a = solve(problem, seed=9, params=params, stop=MaxGenerations(200))
-        b = solve(problem, seed=9, params=params, stop=MaxGenerations(200))
+        gens = MaxGenerations(size(200, 15))
+        a = solve(problem, seed=9, params=params, stop=gens)
+        b = solve(problem, seed=9, params=params, stop=gens)
         np.testing.assert_array_equal(a.order, b.order)
         np.testing.assert_array_equal(a.history.best_cost, b.history.best_cost)
         assert (a.generations, a.restarts) == (b.generations, b.restarts)

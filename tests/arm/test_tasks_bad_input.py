@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from subtask_opt.arm.tasks import DUPLICATE_TOL, SubtaskSet, load_subtasks
 from subtask_opt.base.errors import InputDataError, SubtaskOptError
+from tests.conftest import examples
 
 FUZZ = int(os.environ.get("FUZZ_EXAMPLES", "60"))
 
@@ -60,7 +61,7 @@ def test_a_huge_json_number_and_a_long_csv_line_are_refused(tmp_path):
         load_subtasks(deep)
 
 
-@settings(max_examples=FUZZ, deadline=None)
+@settings(max_examples=examples(FUZZ), deadline=None)
 @given(st.text(max_size=200), st.sampled_from([".csv", ".json"]))
 def test_any_file_content_gives_a_set_or_our_error(tmp_path_factory, text, suffix):
     path = tmp_path_factory.mktemp("fuzz") / f"s{suffix}"

@@ -23,6 +23,7 @@ from subtask_opt.arm.timing.models import (
     travel_times,
 )
 from subtask_opt.base.errors import ParameterError, UnreachableError
+from tests.conftest import examples, size
 
 
 @functools.cache
@@ -125,9 +126,9 @@ def test_profile_times_reject_bad_values(args: tuple, field: str) -> None:
 
 # ---------------------------------------------------------------- time models
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=examples(15, 6), deadline=None)
 @given(st.sampled_from(ROBOT_NAMES), st.sampled_from(TIME_MODELS), st.integers(0, 10_000),
-       st.integers(3, 8), st.integers(0, 1))
+       st.integers(3, size(8, 5)), st.integers(0, 1))
 def test_matrix_invariants(robot: str, model: str, seed: int, n: int, elbow: int) -> None:
     arm = _arm(robot)
     s = random_subtasks(arm, n, seed=seed)

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 
 from subtask_opt.cli.app import main
+from tests.conftest import size
 
 
 def test_solve_prints_order_and_leg_table_and_writes_json_and_plot(tmp_path, capsys):
     out_json = tmp_path / "r.json"
     out_png = tmp_path / "r.png"
     code = main(["solve", "--case", "square20", "--seed", "3", "--json", str(out_json),
-                 "--plot", str(out_png)])
+                 "--plot", str(out_png), *size([], ["--max-generations", "20"])])
     assert code == 0
     printed = capsys.readouterr().out
     assert "order:" in printed and "leg" in printed and "time [s]" in printed

@@ -8,14 +8,39 @@ import numpy as np
 import pytest
 
 from subtask_opt.arm.model import load_arm
+from subtask_opt.arm.tasks import builtin_case
 from subtask_opt.cli.app import main
+from tests.conftest import REDUCED
 
 
-def test_joint_model_chooses_configurations_and_writes_trajectory(tmp_path, capsys):
+def _case(tmp_path, case: str, robot: str, keep) -> tuple[str, int]:
+    """``case`` as is, or under the coverage run (``REDUCED``) a CSV of the subtasks
+    ``keep(points, arm)`` selects: the same command on a few subtasks. Returns the
+    ``--case`` argument and the number of subtasks."""
+    if not REDUCED:
+        return case, len(builtin_case(case, load_arm(robot)).points)
+    arm = load_arm(robot)
+    pts = builtin_case(case, arm).points
+    pts = pts[keep(pts, arm)]
+    csv = tmp_path / f"{case}_reduced.csv"
+    csv.write_text("x,y\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in pts))
+    return str(csv), len(pts)
+
+
+def test_joint_model_chooses_configurations_and_writes_trajectory(tmp_path, capsys,
+                                                                  monkeypatch):
+    if REDUCED:  # drawing 150 GIF frames is most of the time; 4 frames take the same lines
+        import functools
+
+        from subtask_opt.plotting import trajectory as plot_trajectory
+
+        monkeypatch.setattr(plot_trajectory, "animate_tour",
+                            functools.partial(plot_trajectory.animate_tour, max_frames=4))
     out_json = tmp_path / "r.json"
     out_csv = tmp_path / "t.csv"
     out_gif = tmp_path / "t.gif"
-    code = main(["solve", "--case", "square20", "--robot", "asr_twodof", "--time-model",
+    case, n = _case(tmp_path, "square20", "asr_twodof", lambda pts, arm: slice(0, 5))
+    code = main(["solve", "--case", case, "--robot", "asr_twodof", "--time-model",
                  "joint", "--seed", "1", "--json", str(out_json), "--trajectory", str(out_csv),
                  "--dt", "0.02", "--animate", str(out_gif)])
     assert code == 0
@@ -24,8 +49,8 @@ def test_joint_model_chooses_configurations_and_writes_trajectory(tmp_path, caps
     data = json.loads(out_json.read_text())
     report = data["report"]
     assert report["configurations_mode"] == "optimize"
-    assert len(report["configurations"]) == 20 and set(report["configurations"]) <= {0, 1}
-    assert report["leg_moves"] == ["joint"] * 20
+    assert len(report["configurations"]) == n and set(report["configurations"]) <= {0, 1}
+    assert report["leg_moves"] == ["joint"] * n
     order = np.array(data["order"])
     m = np.array(data["matrix"])
     assert data["total_time"] == pytest.approx(m[order, np.roll(order, -1)].sum())
@@ -60,7 +85,15 @@ def test_line_model_table_shows_infeasible_lines_and_elbow_changes(tmp_path, cap
     assert not_straight and report["diagnostics"]["all_pairs_lines"]["fallback"] == "joint"
     assert "joint" in report["leg_moves"] and "line" in report["leg_moves"]
     # planar_2r's random30 has subtasks only elbow-up reaches: the fixed branch must change
-    assert main(["solve", "--case", "random30", "--time-model", "line", "--configurations",
+    # (reduced: the first subtask only elbow-up reaches, the first only elbow-down
+    # reaches and the first both reach)
+    def one_of_each(pts, arm):
+        q = arm.ik(pts)
+        down, up = np.isfinite(q[:, 0]).all(axis=1), np.isfinite(q[:, 1]).all(axis=1)
+        return [np.flatnonzero(m)[0] for m in (up & ~down, down & ~up, up & down)]
+
+    case, _ = _case(tmp_path, "random30", "planar_2r", one_of_each)
+    assert main(["solve", "--case", case, "--time-model", "line", "--configurations",
                  "fixed"]) == 0
     printed = capsys.readouterr().out
     assert "elbow change" in printed and ("u->d" in printed or "d->u" in printed)

@@ -21,6 +21,7 @@ from subtask_opt.ga.permutation import (
     neighbour_table,
     tour_cost,
 )
+from tests.conftest import examples
 
 
 def _points_matrix(seed: int, n: int) -> np.ndarray:
@@ -32,7 +33,7 @@ def _is_permutation(tour: np.ndarray, n: int) -> bool:
     return np.array_equal(np.sort(tour[:n]), np.arange(n))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(3, 25), nearest=st.booleans(),
        asymmetric=st.booleans())
 def test_greedy_crossover_always_yields_a_permutation(seed, n, nearest, asymmetric):

@@ -47,22 +47,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.arm._kinematics_kernels import (
-    K_A1,
-    K_A2,
-    K_BX,
-    K_BY,
-    K_L1,
-    K_L2,
-    K_LO1,
-    K_LO2,
-    K_S1,
-    K_S2,
-    K_UP1,
-    K_UP2,
-    TWO_PI,
-    ik_point,
-)
+from subtask_opt.arm._kinematics_kernels import TWO_PI, ik_point, unit_direction
 
 LINE_OK, LINE_ANNULUS, LINE_JOINT_LIMIT, LINE_SINGULAR = 0, 1, 2, 3
 # |sin(elbow angle)| below this is a singular configuration (the rim or the inner disc).
@@ -100,10 +85,10 @@ def path_derivatives(kin, q1, q2, ux, uy, out):
     ``out[5] = phi''``, ``out[6:8] = q'''``, ``out[8] = phi'''`` (:data:`N_DER`
     values); returns False at a singular configuration.
     """
-    l1 = kin[K_L1]
-    l2 = kin[K_L2]
-    th1 = kin[K_A1] + kin[K_S1] * q1
-    th12 = th1 + kin[K_A2] + kin[K_S2] * q2
+    l1 = kin.l1
+    l2 = kin.l2
+    th1 = kin.a1 + kin.s1 * q1
+    th12 = th1 + kin.a2 + kin.s2 * q2
     s1 = math.sin(th1)
     c1 = math.cos(th1)
     s12 = math.sin(th12)
@@ -126,14 +111,14 @@ def path_derivatives(kin, q1, q2, ux, uy, out):
            - l2 * c12 * d12 ** 3 - 3.0 * l2 * s12 * d12 * dd12)
     ddd1 = -(l2 * c12 * cx3 + l2 * s12 * cy3) / det
     ddd12 = -(-l1 * c1 * cx3 - l1 * s1 * cy3) / det
-    out[0] = kin[K_S1] * d1
-    out[1] = kin[K_S2] * (d12 - d1)
-    out[2] = kin[K_S1] * dd1
-    out[3] = kin[K_S2] * (dd12 - dd1)
+    out[0] = kin.s1 * d1
+    out[1] = kin.s2 * (d12 - d1)
+    out[2] = kin.s1 * dd1
+    out[3] = kin.s2 * (dd12 - dd1)
     out[4] = d12
     out[5] = dd12
-    out[6] = kin[K_S1] * ddd1
-    out[7] = kin[K_S2] * (ddd12 - ddd1)
+    out[6] = kin.s1 * ddd1
+    out[7] = kin.s2 * (ddd12 - ddd1)
     out[8] = ddd12
     return True
 
@@ -146,8 +131,8 @@ def _follow(kin, x, y, branch, prev0, prev1, out):
         return LINE_ANNULUS
     out[0] += TWO_PI * round((prev0 - out[0]) / TWO_PI)
     out[1] += TWO_PI * round((prev1 - out[1]) / TWO_PI)
-    if not (kin[K_LO1] - _QTOL <= out[0] <= kin[K_UP1] + _QTOL
-            and kin[K_LO2] - _QTOL <= out[1] <= kin[K_UP2] + _QTOL):
+    if not (kin.lower1 - _QTOL <= out[0] <= kin.upper1 + _QTOL
+            and kin.lower2 - _QTOL <= out[1] <= kin.upper2 + _QTOL):
         return LINE_JOINT_LIMIT
     return LINE_OK
 
@@ -162,16 +147,12 @@ def line_geometry(kin, p0, p1, branch, q_start, q_end, m):
     """
     qs = np.zeros((m + 1, 2))
     der = np.zeros((m + 1, N_DER))
-    dx = p1[0] - p0[0]
-    dy = p1[1] - p0[1]
-    d = math.sqrt(dx * dx + dy * dy)
-    ux = dx / d
-    uy = dy / d
+    d, ux, uy = unit_direction(p0[0], p0[1], p1[0], p1[1])
     sg = path_grid(d, m)
     tmp = np.empty(2)
     # The distance to the base is convex along a line: its closest point decides
     # the inner disc, which sampling could step over.
-    s_c = (kin[K_BX] - p0[0]) * ux + (kin[K_BY] - p0[1]) * uy
+    s_c = (kin.base_x - p0[0]) * ux + (kin.base_y - p0[1]) * uy
     if 0.0 < s_c < d:
         if ik_point(kin, p0[0] + s_c * ux, p0[1] + s_c * uy, branch, tmp) == 1:
             return LINE_ANNULUS, sg, qs, der
@@ -575,10 +556,8 @@ def line_profile(kin, p0, p1, branch, q_start, q_end, lim):
         return LINE_SINGULAR, sg, qs, x, w, 0.0, 1.0, np.inf
     if not lim.has_jerk:
         return LINE_OK, sg, qs, x, w, 0.0, 1.0, duration
-    dx = p1[0] - p0[0]
-    dy = p1[1] - p0[1]
-    d = math.sqrt(dx * dx + dy * dy)
-    tau, lam = _smoothing(kin, p0, dx / d, dy / d, branch, sg, qs, der, x, w, lim)
+    _, ux, uy = unit_direction(p0[0], p0[1], p1[0], p1[1])
+    tau, lam = _smoothing(kin, p0, ux, uy, branch, sg, qs, der, x, w, lim)
     return LINE_OK, sg, qs, x, w, tau, lam, lam * (duration + tau)
 
 
@@ -624,11 +603,7 @@ def line_states(kin, p0, p1, branch, sg, qs, x, w, tau, lam, t):
     :func:`line_profile`; t is clamped to [0, duration].
     """
     m = w.shape[0]
-    dx = p1[0] - p0[0]
-    dy = p1[1] - p0[1]
-    d = math.sqrt(dx * dx + dy * dy)
-    ux = dx / d
-    uy = dy / d
+    d, ux, uy = unit_direction(p0[0], p0[1], p1[0], p1[1])
     tk, sk = profile_knots(sg, x, w)
     end = tk[m] + tau
     n_t = t.shape[0]

@@ -3,8 +3,8 @@
 A chromosome is a variable-length list of cells, each gene a flat index
 ``y * width + x``: the first gene is the start, the last the goal, and the
 ones between are the waypoints of a polyline. ``data`` is the grid
-(height x width float64, non-zero = blocked); ``aux`` holds the scalars, laid
-out by the ``AUX_*`` indices below (build it with :func:`make_aux`).
+(height x width float64, non-zero = blocked); ``aux`` holds the scalars, a
+:class:`WaypointAux` named tuple (build it with :func:`make_aux`).
 
 The cost to minimise is ``length + Q * hits``: the Euclidean length of the
 polyline plus ``Q`` for every blocked cell a segment touches. The thesis
@@ -12,15 +12,15 @@ maximises ``F = C f + Q`` with ``f = 1 / length``; for collision-free paths
 both orders agree, and counting the cells a path crosses gives the search a
 slope towards feasibility where a flat penalty gives none.
 
-Two initialisations (``AUX_INIT``):
+Two initialisations (``WaypointAux.init``):
 
 * ``INIT_RANDOM`` (the thesis): random cells in random number, drawn again
-  (up to ``AUX_INIT_TRIES`` times) until the path is collision-free;
+  (up to ``init_tries`` times) until the path is collision-free;
 * ``INIT_VISIBILITY``: the branch to the goal of a random tree grown along
   lines of sight (an RRT on cell centres), so every member starts feasible
   but different.
 
-``AUX_SHORTCUT`` turns on the ``improve`` operator (a memetic step): drop
+``shortcut`` turns on the ``improve`` operator (a memetic step): drop
 every waypoint whose neighbours see each other (never longer, by the triangle
 inequality) and slide each waypoint to a neighbouring cell while that
 shortens the path.
@@ -29,31 +29,45 @@ shortens the path.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
+from subtask_opt.base.errors import ParameterError
 from subtask_opt.ga.dispatch import OperatorSet, register
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.planners.grid._kernels import segment_hits
 
-AUX_SX, AUX_SY, AUX_GX, AUX_GY, AUX_PENALTY, AUX_INIT, AUX_INIT_TRIES, AUX_SHORTCUT = range(8)
-AUX_SIZE = 8
-INIT_RANDOM = 0.0
-INIT_VISIBILITY = 1.0
+INIT_RANDOM = 0
+INIT_VISIBILITY = 1
 
 
-def make_aux(start: tuple[int, int], goal: tuple[int, int], *, penalty: float, init: float,
-             init_tries: int, shortcut: bool) -> np.ndarray:
-    """Pack the scalar parameters of the waypoint operators into ``aux``."""
-    aux = np.zeros(AUX_SIZE)
-    aux[AUX_SX], aux[AUX_SY] = start
-    aux[AUX_GX], aux[AUX_GY] = goal
-    aux[AUX_PENALTY] = penalty
-    aux[AUX_INIT] = init
-    aux[AUX_INIT_TRIES] = init_tries
-    aux[AUX_SHORTCUT] = 1.0 if shortcut else 0.0
-    return aux
+class WaypointAux(NamedTuple):
+    """The scalar parameters of the waypoint operators (numba caches them by type)."""
+
+    start_x: int
+    start_y: int
+    goal_x: int
+    goal_y: int
+    penalty: float
+    """``Q``: cost added per blocked cell a segment touches."""
+    init: int
+    """``INIT_RANDOM`` or ``INIT_VISIBILITY``."""
+    init_tries: int
+    """Draws of a new member before the least-colliding one is kept (>= 1)."""
+    shortcut: bool
+    """Whether ``improve`` drops skippable waypoints and slides the rest."""
+
+
+def make_aux(start: tuple[int, int], goal: tuple[int, int], *, penalty: float, init: int,
+             init_tries: int, shortcut: bool) -> WaypointAux:
+    """The :class:`WaypointAux` of a run, with the kernels' scalar types."""
+    if init not in (INIT_RANDOM, INIT_VISIBILITY):
+        raise ParameterError(f"make_aux: init must be INIT_RANDOM ({INIT_RANDOM}) or "
+                             f"INIT_VISIBILITY ({INIT_VISIBILITY}), got {init!r}")
+    return WaypointAux(int(start[0]), int(start[1]), int(goal[0]), int(goal[1]), float(penalty),
+                       int(init), int(init_tries), bool(shortcut))
 
 
 @njit(cache=True)
@@ -80,14 +94,14 @@ def path_cost(genes, length, data, aux):
         b = genes[i + 1]
         total += _seg_len(w, a, b)
         hits += segment_hits(data, a % w, a // w, b % w, b // w, False)
-    return total + aux[AUX_PENALTY] * hits
+    return total + aux.penalty * hits
 
 
 @njit(cache=True)
 def _segment_cost(data, aux, a, b):
     w = data.shape[1]
     hits = segment_hits(data, a % w, a // w, b % w, b // w, False)
-    return _seg_len(w, a, b) + aux[AUX_PENALTY] * hits
+    return _seg_len(w, a, b) + aux.penalty * hits
 
 
 @njit(cache=True)
@@ -107,6 +121,13 @@ def _drop_skippable(genes, length, data):
 
 
 @njit(cache=True)
+def _free(data, x, y):
+    """Whether cell (x, y) is on the grid and free."""
+    h, w = data.shape
+    return 0 <= x < w and 0 <= y < h and data[y, x] == 0.0
+
+
+@njit(cache=True)
 def _random_free(data, rng):
     h, w = data.shape
     for _ in range(64):
@@ -122,7 +143,7 @@ def _random_path(genes, data, aux, rng):
     """Start, 0..cap-2 random free cells, goal."""
     w = data.shape[1]
     cap = genes.shape[0]
-    genes[0] = int(aux[AUX_SY]) * w + int(aux[AUX_SX])
+    genes[0] = aux.start_y * w + aux.start_x
     k_inner = rng.integers(0, min(cap - 2, 6) + 1) if cap > 2 else 0
     length = 1
     for _ in range(k_inner):
@@ -130,7 +151,7 @@ def _random_path(genes, data, aux, rng):
         if c >= 0:
             genes[length] = c
             length += 1
-    genes[length] = int(aux[AUX_GY]) * w + int(aux[AUX_GX])
+    genes[length] = aux.goal_y * w + aux.goal_x
     return length + 1
 
 
@@ -143,8 +164,8 @@ def _visibility_tree(genes, data, aux, rng):
     h, w = data.shape
     cap = genes.shape[0]
     n = h * w
-    start = int(aux[AUX_SY]) * w + int(aux[AUX_SX])
-    goal = int(aux[AUX_GY]) * w + int(aux[AUX_GX])
+    start = aux.start_y * w + aux.start_x
+    goal = aux.goal_y * w + aux.goal_x
     nodes = np.empty(n, dtype=np.int64)
     parent = np.empty(n, dtype=np.int64)
     in_tree = np.zeros(n, dtype=np.bool_)
@@ -191,8 +212,8 @@ def _visibility_tree(genes, data, aux, rng):
 def random_path(genes, data, aux, rng, best, best_len):
     """``randomize``: a new member, redrawn until collision-free (up to the
     configured number of tries; the least-colliding draw otherwise)."""
-    tries = max(1, int(aux[AUX_INIT_TRIES]))
-    use_walk = aux[AUX_INIT] == INIT_VISIBILITY
+    tries = max(1, aux.init_tries)
+    use_walk = aux.init == INIT_VISIBILITY
     keep = np.empty_like(genes)
     keep_len = _random_path(keep, data, aux, rng)  # the fallback if every draw fails
     keep_cost = path_cost(keep, keep_len, data, aux)
@@ -204,7 +225,7 @@ def random_path(genes, data, aux, rng, best, best_len):
         else:
             length = _random_path(genes, data, aux, rng)
         cost = path_cost(genes, length, data, aux)
-        if cost < aux[AUX_PENALTY]:  # no blocked cell touched
+        if cost < aux.penalty:  # no blocked cell touched
             return length
         if cost < keep_cost:
             keep_cost = cost
@@ -259,7 +280,7 @@ def nonuniform_mutation(genes, length, data, aux, rng, strength):
         for _ in range(8):
             x = mx + rng.integers(-span // 3, span // 3 + 1)
             y = my + rng.integers(-span // 3, span // 3 + 1)
-            if 0 <= x < w and 0 <= y < h and data[y, x] == 0.0:
+            if _free(data, x, y):
                 for m in range(length, k + 1, -1):
                     genes[m] = genes[m - 1]
                 genes[k + 1] = y * w + x
@@ -283,7 +304,7 @@ def nonuniform_mutation(genes, length, data, aux, rng, strength):
             dy = rng.integers(-1, 2)
         x = x0 + dx
         y = y0 + dy
-        if 0 <= x < w and 0 <= y < h and data[y, x] == 0.0:
+        if _free(data, x, y):
             genes[k] = y * w + x
             break
     return length
@@ -310,9 +331,7 @@ def _nudge(genes, length, data, aux):
                 for dx in range(-1, 2):
                     x = x0 + dx
                     y = y0 + dy
-                    if (dx == 0 and dy == 0) or x < 0 or y < 0 or x >= w or y >= h:
-                        continue
-                    if data[y, x] != 0.0:
+                    if (dx == 0 and dy == 0) or not _free(data, x, y):
                         continue
                     c = y * w + x
                     cost = _segment_cost(data, aux, a, c) + _segment_cost(data, aux, c, b)
@@ -338,7 +357,7 @@ def shortcut(genes, length, data, aux):
             genes[out] = genes[i]
             out += 1
     length = out
-    if aux[AUX_SHORTCUT] == 0.0:
+    if not aux.shortcut:
         return length
     length = _drop_skippable(genes, length, data)
     for _ in range(genes.shape[0]):

@@ -177,6 +177,16 @@ def test_cost_counts_blocked_cells():
     assert wp.path_cost(genes, 4, data, aux) == pytest.approx(1 + 2 + 1)
 
 
+def test_aux_is_a_typed_named_tuple():
+    aux = wp.make_aux((1.0, 2), (3, 4), penalty=5, init=1.0, init_tries=3, shortcut=1)
+    assert isinstance(aux, wp.WaypointAux)
+    assert aux == wp.WaypointAux(1, 2, 3, 4, 5.0, wp.INIT_VISIBILITY, 3, True)
+    # one numba type per field, whatever number types the caller passed
+    assert [type(v) for v in aux] == [int, int, int, int, float, int, int, bool]
+    with pytest.raises(ParameterError, match="init must be .* got 2"):
+        wp.make_aux((0, 0), (1, 1), penalty=1.0, init=2, init_tries=1, shortcut=False)
+
+
 @settings(max_examples=15, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(4, 9), st.integers(4, 9), st.floats(0.0, 0.4))
 def test_reported_paths_never_cross_obstacles(seed, w, h, density):

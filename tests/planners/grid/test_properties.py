@@ -17,6 +17,7 @@ from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.planners.base import planners
 from subtask_opt.planners.grid import distance_transform as dt
 from subtask_opt.planners.grid.world import GridWorld
+from tests.conftest import examples
 from tests.planners.grid.test_grid_oracles import path_violations
 
 GRID = planners("grid")
@@ -38,7 +39,7 @@ def grid_and_cells(draw, max_side=8):
     return occ, (int(free[i][1]), int(free[i][0])), (int(free[j][1]), int(free[j][0]))
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(25), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(grid_and_cells(), st.integers(0, 2**32))
 def test_no_planner_enters_a_blocked_cell_or_a_corner_gap(case, seed):
     occ, start, goal = case
