@@ -42,6 +42,7 @@ from subtask_opt.ga.loop import run_ga
 from subtask_opt.planners.base import check_seed, register
 from subtask_opt.planners.grid import _waypoint_kernels as wp
 from subtask_opt.planners.grid._kernels import segment_hits
+from subtask_opt.planners.grid.distance_transform import distance_field
 from subtask_opt.planners.grid.world import GridWorld, check_small_grid
 
 INITS = ("random", "visibility")
@@ -167,6 +168,15 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: GAPathParams | None
                           info={"generations": 0, "seed": seed_value, "init": params.init,
                                 "fitness": 1.0})
     t0 = time.perf_counter()
+    # a segment may not pass a corner gap, so the GA can only reach the start's 4-connected
+    # component: decide that in one distance transform instead of running out of generations
+    field = distance_field(world, goal_xy, "octile", corner_cutting=False)
+    if not np.isfinite(field[start_xy[1], start_xy[0]]):
+        return PlanResult(np.zeros((0, 2)), False,
+                          "no path: the goal is not connected to the start by free cells",
+                          name, time.perf_counter() - t0,
+                          info={"generations": 0, "seed": seed_value, "init": params.init,
+                                "fitness": 0.0}, outcome=Outcome.NO_PATH)
     data = world.occupancy.astype(np.float64)
     aux = wp.make_aux(start_xy, goal_xy, penalty=params.penalty,
                       init=wp.INIT_VISIBILITY if params.init == "visibility" else wp.INIT_RANDOM,

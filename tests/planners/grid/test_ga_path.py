@@ -94,6 +94,20 @@ def test_no_path_gives_success_false():
     res = ga_path.plan(world, (0, 0), (2, 2), seed=0,
                        params=ga_path.GAPathParams(init_tries=2), stop=MaxGenerations(5))
     assert not res.success and res.length == float("inf") and res.outcome == "no_path"
+    # decided before any generation runs, whatever the stop allows
+    patient = ga_path.plan(world, (0, 0), (2, 2), seed=0, stop=MaxGenerations(10**6))
+    assert patient.outcome == "no_path" and patient.info["generations"] == 0
+
+
+def test_corner_gap_only_route_is_no_path_for_the_ga():
+    # (0, 0) touches the rest only through the gap between two blocked cells meeting at a
+    # corner, which no planner may pass
+    world = GridWorld.from_ascii("""
+        .#...
+        #....
+    """)
+    res = ga_path.plan(world, (0, 0), (4, 1), seed=0, stop=MaxGenerations(50))
+    assert res.outcome == "no_path"
 
 
 def test_start_is_goal_bad_cells_and_big_grid():
