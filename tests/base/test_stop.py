@@ -83,8 +83,10 @@ def test_run_in_chunks_stops_exactly_at_max_generations():
     seen = []
     run_in_chunks(run_chunk, progress, [MaxGenerations(300)], on_chunk=seen.append)
     assert state["gen"] == 300
-    assert state["chunks"] == [64, 128, 108]  # growing chunks, never past the limit
-    assert [p.generation for p in seen] == [64, 192, 300]
+    # chunks start at one generation and double (the fake kernel is far under the 0.05 s a
+    # chunk may take), never past the limit: 1 + 2 + ... + 128 = 255, then the last 45
+    assert state["chunks"] == [1, 2, 4, 8, 16, 32, 64, 128, 45]
+    assert [p.generation for p in seen] == [1, 3, 7, 15, 31, 63, 127, 255, 300]
 
 
 def test_run_in_chunks_ends_when_the_kernel_stops_itself():
