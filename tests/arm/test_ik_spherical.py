@@ -25,6 +25,7 @@ from subtask_opt.arm.ik import (
 from subtask_opt.arm.poses import make_targets
 from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import ParameterError
+from tests.arm.test_ik import _fk_error, _mod_distance
 from tests.conftest import SHARED_DATA
 
 TWO_PI = 2 * math.pi
@@ -79,19 +80,6 @@ def arm(request, offset_arm):
     return offset_arm if request.param == "offset6r" else _arm(request.param)
 
 
-def _fk_error(arm, q, pose):
-    """Position and rotation error of Pinocchio's FK at q from pose (own formula)."""
-    reached = arm.fk(q)
-    dp = np.linalg.norm(reached[:3, 3] - pose[:3, 3])
-    rel = pose[:3, :3].T @ reached[:3, :3]
-    skew = np.array([rel[2, 1] - rel[1, 2], rel[0, 2] - rel[2, 0], rel[1, 0] - rel[0, 1]])
-    dr = math.atan2(np.linalg.norm(skew) / 2, (np.trace(rel) - 1) / 2)
-    return dp, dr
-
-
-def _mod_distance(a, b):
-    d = np.abs(np.asarray(a) - np.asarray(b)) % TWO_PI
-    return float(np.minimum(d, TWO_PI - d).max())
 
 
 def _alternative_count(arm, q):
