@@ -377,3 +377,10 @@ def test_bad_urdf_prints_only_our_line(tmp_path, capfd):
     err = capfd.readouterr().err.strip()
     assert len(err.splitlines()) == 1, err
     assert str(urdf) in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv", [["bench", "maklink", "--runs", "1", "--seed=--"],
+                                  ["plan", "reactive", "--world", "simple", "--start=--"]])
+def test_a_lone_double_dash_is_a_missing_value(argv, capsys):
+    # argparse hands the handler an empty list for "--"; found by make fuzz
+    _exits(argv, 2, capsys, "expected a value")
