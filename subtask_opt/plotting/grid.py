@@ -98,7 +98,9 @@ def plot_grid(world: Any, results: Sequence[Any] = (), *, start: Any = None, goa
             f": {names}" if names else "")
     ax.set_title(title, fontsize=10)
     if legend and (results or start is not None):
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        # right of the axes, past the colour bar when a distance field is drawn
+        ax.legend(fontsize=7, loc="upper left",
+                  bbox_to_anchor=(1.18 if field is not None else 1.01, 1.0))
     return ax
 
 

@@ -50,6 +50,10 @@ _STYLE = {  # leg kind -> (colour, line style, legend label)
 }
 
 
+MAX_RESTART_LINES = 40
+"""Restarts drawn as full-height lines; more are drawn as ticks on the floor."""
+
+
 def reachable_raster(arm: Arm, extent: tuple[float, float, float, float],
                      resolution: int = 360) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(X, Y, mask) on a raster of ``extent`` (xmin, xmax, ymin, ymax): mask is True where
@@ -356,9 +360,13 @@ def plot_convergence(result: Result, *, ax: Axes | None = None,
     g_best = h.generation_of_best()
     ax.plot([g_best], [floor], marker="*", color="tab:green", ms=11, ls="none", zorder=5,
             label=f"final best reached (generation {g_best})")
-    for i, g in enumerate(h.restarts):
-        ax.axvline(g, color="tab:orange", lw=0.6, alpha=0.5,
-                   label="restart" if i == 0 else None)
+    if len(h.restarts) <= MAX_RESTART_LINES:
+        for i, g in enumerate(h.restarts):
+            ax.axvline(g, color="tab:orange", lw=0.6, alpha=0.5,
+                       label="restart" if i == 0 else None)
+    elif len(h.restarts):  # too many to draw as lines: a tick per restart along the bottom
+        ax.plot(h.restarts, np.full(len(h.restarts), floor), marker="|", ms=7, ls="none",
+                color="tab:orange", alpha=0.4, label=f"restarts ({len(h.restarts)})")
     if optimum is not None and optimum < final:
         ax.axhline(final - optimum, color="tab:red", ls="--", lw=1,
                    label=f"gap to the optimum ({final - optimum:.3g} s)")
