@@ -388,14 +388,7 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
                               "search rounds")
     order = genes.copy()
     index = choice
-    chosen = np.array([problem.configurations[i][index[i]] for i in range(n)])
-    path = np.vstack([problem.home, chosen[order], problem.home])
-    planned = np.array([trapezoid_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
-                        for k in range(n + 1)])
-    lim = problem.arm.limits
-    executed = np.array([ruckig_leg_time(path[k], path[k + 1], lim.velocity,
-                                         problem.limits.acceleration, lim.jerk)
-                         for k in range(n + 1)])
+    chosen, path, planned, executed = _tour_legs(problem, order, index)
     counts = {
         "targets": n,
         "configurations_per_target": [int(k) for k in problem.counts],
@@ -415,6 +408,22 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
 
 
 
+def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The chosen configurations (input order), the joint path home -> ... -> home, and each
+    leg's planned (trapezoid) and executed (ruckig) time."""
+    n = problem.size
+    chosen = np.array([problem.configurations[i][choice[i]] for i in range(n)])
+    path = np.vstack([problem.home, chosen[order], problem.home])
+    planned = np.array([trapezoid_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
+                        for k in range(n + 1)])
+    lim = problem.arm.limits
+    executed = np.array([ruckig_leg_time(path[k], path[k + 1], lim.velocity,
+                                         problem.limits.acceleration, lim.jerk)
+                         for k in range(n + 1)])
+    return chosen, path, planned, executed
+
+
 def evaluate_tour(problem: SerialProblem, order: Any, choice: Any, *, seed: int = 0,
                   cpu: dict[str, float] | None = None) -> SerialResult:
     """The :class:`SerialResult` of a given tour (another method's answer, say).
@@ -431,14 +440,7 @@ def evaluate_tour(problem: SerialProblem, order: Any, choice: Any, *, seed: int 
     if c.shape != (n,) or np.any(c < 0) or np.any(c >= problem.counts):
         raise ParameterError(f"choice must hold one configuration index per target, got "
                              f"{choice!r}")
-    chosen = np.array([problem.configurations[i][c[i]] for i in range(n)])
-    path = np.vstack([problem.home, chosen[o], problem.home])
-    planned = np.array([trapezoid_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
-                        for k in range(n + 1)])
-    lim = problem.arm.limits
-    executed = np.array([ruckig_leg_time(path[k], path[k + 1], lim.velocity,
-                                         problem.limits.acceleration, lim.jerk)
-                         for k in range(n + 1)])
+    chosen, path, planned, executed = _tour_legs(problem, o, c)
     colliding = 0
     if problem.checker is not None:
         colliding = sum(problem.checker.leg_in_collision(path[k], path[k + 1], problem.clearance)

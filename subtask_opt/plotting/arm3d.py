@@ -52,21 +52,23 @@ LINK_COLOUR = "#e8590c"
 _DECIMALS = 4  # 0.1 mm
 
 
-def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
-    """``value`` as a finite float array of ``shape`` (None: any size); ParameterError."""
+def checked_array(owner: str, name: str, value: Any,
+                  shape: tuple[int | None, ...]) -> np.ndarray:
+    """``value`` as a finite float array of ``shape`` (None: any size); ParameterError
+    naming ``owner`` and ``name`` (the array checks of the serial-arm figures)."""
     try:
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError):
-        raise ParameterError(f"write_tour_html: {name} must be an array of numbers, "
+        raise ParameterError(f"{owner}: {name} must be an array of numbers, "
                              f"got {type(value).__name__}") from None
     if arr.ndim != len(shape) or any(s is not None and a != s
                                      for a, s in zip(arr.shape, shape, strict=True)):
         want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + (
             ",)" if len(shape) == 1 else ")")
-        raise ParameterError(f"write_tour_html: {name} must have shape {want}, "
+        raise ParameterError(f"{owner}: {name} must have shape {want}, "
                              f"got {arr.shape}")
     if not np.all(np.isfinite(arr)):
-        raise ParameterError(f"write_tour_html: {name} must be finite")
+        raise ParameterError(f"{owner}: {name} must be finite")
     return arr
 
 
@@ -118,25 +120,26 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
 
     if not isinstance(arm, SerialArm):
         raise ParameterError(f"write_tour_html: arm must be a SerialArm, got {type(arm).__name__}")
-    t = _array("times", times, (None,))
+    t = checked_array("write_tour_html", "times", times, (None,))
     if t.size == 0:
         raise ParameterError("write_tour_html: times must hold at least one time")
     if t.size > 1 and np.any(np.diff(t) < 0):
         bad = int(np.argmax(np.diff(t) < 0))
         raise ParameterError(f"write_tour_html: times must be non-decreasing, got "
                              f"times[{bad}]={t[bad]} > times[{bad + 1}]={t[bad + 1]}")
-    qa = _array("q", q, (t.size, arm.nq))
+    qa = checked_array("write_tour_html", "q", q, (t.size, arm.nq))
     require_int("write_tour_html", "max_frames", max_frames, 2)
     if not isinstance(title, str):
         raise ParameterError(f"write_tour_html: title must be a string, got {title!r}")
     if scene is not None and not isinstance(scene, Scene):
         raise ParameterError(f"write_tour_html: scene must be a Scene or None, "
                              f"got {type(scene).__name__}")
-    pts = np.zeros((0, 3)) if targets is None else _array("targets", targets, (None, 3))
+    pts = (np.zeros((0, 3)) if targets is None
+           else checked_array("write_tour_html", "targets", targets, (None, 3)))
     if axes is not None:
         if targets is None:
             raise ParameterError("write_tour_html: axes need targets")
-        ax = _array("axes", axes, (pts.shape[0], 3))
+        ax = checked_array("write_tour_html", "axes", axes, (pts.shape[0], 3))
         norms = np.linalg.norm(ax, axis=1)
         if np.any(norms < 1e-12):
             raise ParameterError(f"write_tour_html: axes[{int(np.argmin(norms))}] is zero; "

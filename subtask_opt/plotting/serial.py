@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.plotting.arm3d import checked_array
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -24,22 +25,6 @@ MAX_NUMBERED_3D = 20
 
 _BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
               (0, 4), (1, 5), (2, 6), (3, 7)]
-
-
-def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ParameterError(f"plot_serial_tour: {name} must be an array of numbers") from None
-    if arr.ndim != len(shape) or any(s is not None and a != s
-                                     for a, s in zip(arr.shape, shape, strict=True)):
-        want = "(" + ", ".join("any" if s is None else str(s) for s in shape) + (
-            ",)" if len(shape) == 1 else ")")
-        raise ParameterError(f"plot_serial_tour: {name} must have shape {want}, "
-                             f"got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ParameterError(f"plot_serial_tour: {name} must be finite")
-    return arr
 
 
 def target_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
@@ -76,15 +61,15 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     """The figure of :func:`plot_serial_tour`, not saved (arguments as there)."""
     import matplotlib.pyplot as plt
 
-    pts = _array("targets", targets, (None, 3))
+    pts = checked_array("plot_serial_tour", "targets", targets, (None, 3))
     n = pts.shape[0]
     if n == 0:
         raise ParameterError("plot_serial_tour: targets must hold at least one target")
-    path = _array("tool_path", tool_path, (None, 3))
+    path = checked_array("plot_serial_tour", "tool_path", tool_path, (None, 3))
     if path.shape[0] < 2:
         raise ParameterError(f"plot_serial_tour: tool_path needs at least 2 points, "
                              f"got {path.shape[0]}")
-    legs = _array("leg_times", leg_times, (n + 1,))
+    legs = checked_array("plot_serial_tour", "leg_times", leg_times, (n + 1,))
     if np.any(legs < 0):
         raise ParameterError(f"plot_serial_tour: leg_times must be >= 0, got min "
                              f"{legs.min()}")
@@ -123,7 +108,7 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     if q_home is not None:
         from subtask_opt.plotting.arm3d import skeleton_points
 
-        q = _array("q_home", q_home, (arm.nq,))
+        q = checked_array("plot_serial_tour", "q_home", q_home, (arm.nq,))
         skel = skeleton_points(arm, q[None])[0]
         ax.plot(*skel.T, color="#e8590c", lw=4, solid_capstyle="round", label="arm at home")
     every = np.vstack([pts, path])
