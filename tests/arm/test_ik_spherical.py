@@ -25,7 +25,7 @@ from subtask_opt.arm.ik import (
 from subtask_opt.arm.poses import make_targets
 from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import ParameterError
-from tests.arm.test_ik import _fk_error, _mod_distance
+from tests.arm.test_ik import _alternative_count, _fk_error, _mod_distance
 from tests.conftest import SHARED_DATA
 
 TWO_PI = 2 * math.pi
@@ -82,14 +82,6 @@ def arm(request, offset_arm):
 
 
 
-def _alternative_count(arm, q):
-    """Brute force: values q_j + 2 pi k (|k| <= 3) inside the limits, multiplied over joints."""
-    lim = arm.limits
-    total = 1
-    for j in range(arm.nq):
-        total *= sum(1 for k in range(-3, 4)
-                     if lim.lower[j] - 1e-9 <= q[j] + TWO_PI * k <= lim.upper[j] + 1e-9)
-    return total
 
 
 def test_vs060_has_a_spherical_wrist_at_the_urdf_point():
