@@ -419,6 +419,12 @@ def exact_local_search(genes, length, data, aux):
             continue
         if _or_opt_pass(genes, n, data, fwd, bwd, scratch, min(aux.max_segment, n - 3)):
             continue
+        # asymmetric costs: the tour driven backwards is the one 2-opt move the passes skip
+        ahead = fwd[n - 1] + data[genes[n - 1], genes[0]]
+        back = bwd[n - 1] + data[genes[0], genes[n - 1]]
+        if back < ahead - 1e-12 * abs(ahead):
+            genes[1:n] = genes[1:n][::-1].copy()
+            continue
         return n
 
 
