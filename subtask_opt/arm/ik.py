@@ -362,6 +362,7 @@ class _Chain:
             path.append(j)
             j = int(model.parents[j])
         path.reverse()
+        self.joints = path  # Pinocchio joint ids, root to tool
         data = model.createData()
         pin.computeJointJacobians(model, data, pin.neutral(model))
         self.placements = np.array([model.jointPlacements[j].homogeneous for j in path])
@@ -639,16 +640,9 @@ def spherical_wrist_kinematics(arm: SerialArm, *, checks: int = 20, tol: float =
     data = model.createData()
     q0 = np.zeros(6)
     pin.forwardKinematics(model, data, q0)
-    tool = model.frames[arm.tool_frame_id]
-    joints = []
-    j = int(tool.parentJoint)
-    while j > 0:
-        joints.append(j)
-        j = int(model.parents[j])
-    joints.reverse()
     axes = np.array([np.array(data.oMi[j].rotation) @ chain.axes[k]
-                     for k, j in enumerate(joints)])
-    points = np.array([np.array(data.oMi[j].translation) for j in joints])
+                     for k, j in enumerate(chain.joints)])
+    points = np.array([np.array(data.oMi[j].translation) for j in chain.joints])
     wrist, miss = _line_point(axes[3:], points[3:])
     if miss > geometry_tol:
         return None

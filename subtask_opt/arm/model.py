@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.arm import _kinematics_kernels as _k
+from subtask_opt.arm.limit_arrays import LIMIT_RANGE, freeze_limit_arrays
 from subtask_opt.arm.serial import example_robot_data_share, robots_dir
 from subtask_opt.base.errors import (
     InputDataError,
@@ -40,10 +41,6 @@ from subtask_opt.base.files import parse_json, quiet_stderr, read_text
 
 ROBOT_NAMES: tuple[str, ...] = ("planar_2r", "asr_twodof")
 BRANCH_NAMES: tuple[str, str] = ("elbow-down", "elbow-up")
-
-LIMIT_RANGE = (1e-6, 1e6)
-"""Speed, acceleration and jerk limits (Cartesian and joint) lie in this range: outside it a
-time model's arithmetic under- or overflows."""
 
 # Tolerance for "this axis is the world z axis" when reading a URDF.
 _AXIS_TOL = 1e-6
@@ -90,35 +87,7 @@ class JointLimits:
     jerk: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("lower", "upper", "velocity", "acceleration", "jerk"):
-            value = getattr(self, name)
-            if value is None:
-                if name == "jerk":
-                    continue
-                raise ParameterError(f"JointLimits.{name} is required, got None")
-            try:
-                arr = np.array(value, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise ParameterError(
-                    f"JointLimits.{name} must be 2 numbers, got {value!r}") from None
-            if arr.shape != (2,):
-                raise ParameterError(
-                    f"JointLimits.{name} must have 2 values (one per joint), got {value!r}")
-            if not np.all(np.isfinite(arr)):
-                raise ParameterError(f"JointLimits.{name} must be finite, got {arr.tolist()}")
-            lo, hi = LIMIT_RANGE
-            if name not in ("lower", "upper") and np.any((arr < lo) | (arr > hi)):
-                raise ParameterError(f"JointLimits.{name} must be in [{lo:g}, {hi:g}], "
-                                     f"got {arr.tolist()}")
-            if name in ("lower", "upper") and np.any(np.abs(arr) > 1e3):
-                raise ParameterError(f"JointLimits.{name} must be within +-1000 rad, "
-                                     f"got {arr.tolist()}")
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        if np.any(self.lower >= self.upper):
-            raise ParameterError(
-                f"JointLimits.lower must be < upper, got lower={self.lower.tolist()} "
-                f"upper={self.upper.tolist()}")
+        freeze_limit_arrays(self, optional=("jerk",), joints=2)
 
     def __repr__(self) -> str:
         jerk = None if self.jerk is None else self.jerk.tolist()

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from subtask_opt.arm.limit_arrays import freeze_limit_arrays
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.base.files import parse_json
 
@@ -79,35 +80,7 @@ class SerialLimits:
     name: str = "urdf"
 
     def __post_init__(self) -> None:
-        n = None
-        for field in ("lower", "upper", "velocity", "acceleration", "jerk"):
-            value = getattr(self, field)
-            if value is None:
-                if field in ("acceleration", "jerk"):
-                    continue
-                raise ParameterError(f"SerialLimits.{field} is required, got None")
-            try:
-                arr = np.array(value, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise ParameterError(
-                    f"SerialLimits.{field} must be a list of numbers, got {value!r}") from None
-            if arr.ndim != 1 or arr.size == 0:
-                raise ParameterError(
-                    f"SerialLimits.{field} must be a non-empty 1-D list, got {value!r}")
-            n = arr.size if n is None else n
-            if arr.size != n:
-                raise ParameterError(
-                    f"SerialLimits.{field} must have {n} values (one per joint), got {arr.size}")
-            if not np.all(np.isfinite(arr)):
-                raise ParameterError(f"SerialLimits.{field} must be finite, got {arr.tolist()}")
-            if field not in ("lower", "upper") and np.any(arr <= 0):
-                raise ParameterError(f"SerialLimits.{field} must be > 0, got {arr.tolist()}")
-            arr.setflags(write=False)
-            object.__setattr__(self, field, arr)
-        if np.any(self.lower >= self.upper):
-            raise ParameterError(
-                f"SerialLimits.lower must be < upper, got lower={self.lower.tolist()} "
-                f"upper={self.upper.tolist()}")
+        freeze_limit_arrays(self, optional=("acceleration", "jerk"))
 
     @property
     def n(self) -> int:

@@ -244,7 +244,7 @@ def test_fk_is_thread_safe():
 
 @pytest.mark.parametrize(("field", "value", "match"), [
     ("lower", [0.0, 2.0], "lower must be < upper"),
-    ("velocity", [1.0, 0.0], "velocity must be > 0"),
+    ("velocity", [1.0, 0.0], r"velocity must be in \[1e-06, 1e\+06\]"),
     ("velocity", [1.0], "velocity must have 2 values"),
     ("acceleration", [1.0, math.inf], "acceleration must be finite"),
 ])

@@ -20,6 +20,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from subtask_opt.planners._graph_kernels import nearest_unsettled
+
 # 8-neighbourhood; the first four are the side steps.
 _DX = np.array([1, -1, 0, 0, 1, 1, -1, -1], dtype=np.int64)
 _DY = np.array([0, 0, 1, -1, 1, -1, 1, -1], dtype=np.int64)
@@ -571,15 +573,11 @@ def visibility_field(blocked, gx, gy):
     done = np.zeros(n_free, dtype=np.bool_)
     dist[src] = 0.0
     for _ in range(n_free):
-        u = -1
-        du = np.inf
-        for i in range(n_free):
-            if not done[i] and dist[i] < du:
-                du = dist[i]
-                u = i
+        u = nearest_unsettled(dist, done)
         if u < 0:
             break
         done[u] = True
+        du = dist[u]
         ux = xs[u]
         uy = ys[u]
         for v in range(n_free):

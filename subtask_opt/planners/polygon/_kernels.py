@@ -20,6 +20,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from subtask_opt.planners._graph_kernels import nearest_unsettled
+
 
 class PSOConfig(NamedTuple):
     """Kernel parameters of :func:`pso_run` (built by ``PSOParams.kernel_config``)."""
@@ -392,12 +394,7 @@ def dijkstra_dense(weights, source, target):
     done = np.zeros(n, dtype=np.bool_)
     dist[source] = 0.0
     for _ in range(n):
-        u = -1
-        best = np.inf
-        for v in range(n):
-            if not done[v] and dist[v] < best:
-                best = dist[v]
-                u = v
+        u = nearest_unsettled(dist, done)
         if u < 0 or u == target:
             break
         done[u] = True
