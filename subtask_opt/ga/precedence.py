@@ -342,36 +342,17 @@ def _or_opt(t, data, a, pos, tmp):
                     best_delta = delta
                     best_j = j
             if best_j >= 0 and _better(gain + best_delta, gain):
-                c = 0
+                # the move rotates t[lo:hi_] so that t[mid:hi_] comes first
                 if best_j < i:
-                    for k in range(0, best_j + 1):
-                        tmp[c] = t[k]
-                        c += 1
-                    for k in range(i, e + 1):
-                        tmp[c] = t[k]
-                        c += 1
-                    for k in range(best_j + 1, i):
-                        tmp[c] = t[k]
-                        c += 1
-                    for k in range(e + 1, n):
-                        tmp[c] = t[k]
-                        c += 1
+                    lo, mid, hi_ = best_j + 1, i, e + 1
                 else:
-                    for k in range(0, i):
-                        tmp[c] = t[k]
-                        c += 1
-                    for k in range(e + 1, best_j + 1):
-                        tmp[c] = t[k]
-                        c += 1
-                    for k in range(i, e + 1):
-                        tmp[c] = t[k]
-                        c += 1
-                    for k in range(best_j + 1, n):
-                        tmp[c] = t[k]
-                        c += 1
-                for k in range(n):
-                    t[k] = tmp[k]
-                    pos[t[k]] = k
+                    lo, mid, hi_ = i, e + 1, best_j + 1
+                m = hi_ - lo
+                tmp[:hi_ - mid] = t[mid:hi_]
+                tmp[hi_ - mid:m] = t[lo:mid]
+                for k in range(m):
+                    t[lo + k] = tmp[k]
+                    pos[tmp[k]] = lo + k
                 changed = True
             i += 1
     return changed

@@ -13,6 +13,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from subtask_opt.planners.polygon._kernels import distance_to_edges
 from subtask_opt.planners.polygon._kernels import point_segment_distance as _point_segment
 
 
@@ -152,12 +153,7 @@ def arc_poses(x, y, th, v, omega, dt):
 def _clearance_at(x, y, th, v, omega, dt, f, edges):
     """Distance from the centre at fraction ``f`` of the step to the nearest edge."""
     px, py, _ = arc(x, y, th, v, omega, f * dt)
-    best = np.inf
-    for e in range(edges.shape[0]):
-        d = _point_segment(px, py, edges[e, 0], edges[e, 1], edges[e, 2], edges[e, 3])
-        if d < best:
-            best = d
-    return best
+    return distance_to_edges(px, py, edges)
 
 
 @njit(cache=True)
