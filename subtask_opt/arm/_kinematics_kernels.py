@@ -280,80 +280,80 @@ def cartesian_matrix(points: np.ndarray, phi: np.ndarray, configs: np.ndarray,
 
 
 @njit(cache=True)
+def _check_leg(i: int, j: int, points: np.ndarray, q: np.ndarray, phi: np.ndarray,
+               configs: np.ndarray, kin: ArmKinematics, vel: np.ndarray, kv: float, ka: float,
+               kw: float, kw_dot: float, n_samples: int, qs: np.ndarray,
+               jac: np.ndarray) -> tuple[bool, float]:
+    """The straight leg i -> j (i < j) driven as in :func:`leg_check`: (the arm
+    cannot follow the line, max |q_dot| / velocity limit)."""
+    if configs[i] != configs[j]:  # switching branch needs the singular rim
+        return True, np.inf
+    d, ux, uy = unit_direction(points[i, 0], points[i, 1], points[j, 0], points[j, 1])
+    br = configs[i]
+    # The radius along a line is convex: the point closest to the base
+    # decides the inner disc and the elbow limit exactly.
+    s_c = (kin.base_x - points[i, 0]) * ux + (kin.base_y - points[i, 1]) * uy
+    if 0.0 < s_c < d:
+        if ik_point(kin, points[i, 0] + s_c * ux, points[i, 1] + s_c * uy, br, qs) != 0:
+            return True, np.inf
+    t_tr = trapezoid_time_nb(d, kv, ka)
+    t_rot = trapezoid_time_nb(abs(wrap_angle(phi[j] - phi[i])), kw, kw_dot)
+    scale = t_tr / max(t_tr, t_rot)  # uniform time scaling of the slower leg
+    worst = 0.0
+    prev0 = q[i, 0]
+    prev1 = q[i, 1]
+    for m in range(1, n_samples):
+        s = d * m / n_samples
+        if ik_point(kin, points[i, 0] + s * ux, points[i, 1] + s * uy, br, qs) == 1:
+            return True, np.inf
+        # Follow the branch continuously: the joints may not jump by 2 pi.
+        q0 = qs[0] + TWO_PI * round((prev0 - qs[0]) / TWO_PI)
+        q1 = qs[1] + TWO_PI * round((prev1 - qs[1]) / TWO_PI)
+        if not (_within(q0, kin.lower1, kin.upper1) and _within(q1, kin.lower2, kin.upper2)):
+            return True, np.inf
+        prev0 = q0
+        prev1 = q1
+        sdot = scale * min(kv, math.sqrt(2.0 * ka * s), math.sqrt(2.0 * ka * (d - s)))
+        jacobian_point(kin, q0, q1, jac)
+        det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
+        if det == 0.0:
+            worst = np.inf
+        else:
+            qd0 = (jac[1, 1] * ux - jac[0, 1] * uy) * sdot / det
+            qd1 = (-jac[1, 0] * ux + jac[0, 0] * uy) * sdot / det
+            worst = max(worst, abs(qd0) / vel[0], abs(qd1) / vel[1])
+    # Arriving at q_j (or q_j + 2 pi n if the joint's range allows) within the limits.
+    q0 = q[j, 0] + TWO_PI * round((prev0 - q[j, 0]) / TWO_PI)
+    q1 = q[j, 1] + TWO_PI * round((prev1 - q[j, 1]) / TWO_PI)
+    if not (_within(q0, kin.lower1, kin.upper1) and _within(q1, kin.lower2, kin.upper2)):
+        return True, np.inf
+    return False, worst
+
+
+@njit(cache=True)
 def leg_check(points: np.ndarray, q: np.ndarray, phi: np.ndarray, configs: np.ndarray,
               kin: ArmKinematics, vel: np.ndarray, kv: float, ka: float, kw: float,
-              kw_dot: float, n_samples: int):
-    """Drive every straight leg with the synchronised Cartesian trapezoid and check the joints.
+              kw_dot: float, n_samples: int, starts: np.ndarray, ends: np.ndarray):
+    """Drive the straight legs starts[k] - ends[k] with the synchronised Cartesian
+    trapezoid and check the joints.
 
-    Returns ``(infeasible, ratio)``, both (N, N): infeasible where the line
+    Returns ``(infeasible, ratio)``, both (M,): infeasible where the line
     leaves the workspace of the endpoints' branch (inner disc, a joint limit,
     a change of branch), else ratio = max over interior samples and joints of
     |q_dot| / velocity limit, with q_dot = J^-1 u s_dot (inf where infeasible).
+    A leg is driven from its lower index, so i -> j and j -> i agree; i -> i is 0.
     """
-    n = points.shape[0]
-    infeasible = np.zeros((n, n), dtype=np.bool_)
-    ratio = np.zeros((n, n))
+    m = starts.shape[0]
+    infeasible = np.zeros(m, dtype=np.bool_)
+    ratio = np.zeros(m)
     qs = np.empty(2)
     jac = np.empty((2, 2))
-    lo = np.array([kin.lower1, kin.lower2])
-    up = np.array([kin.upper1, kin.upper2])
-    for i in range(n):
-        for j in range(i + 1, n):
-            bad = configs[i] != configs[j]  # switching branch needs the singular rim
-            d, ux, uy = unit_direction(points[i, 0], points[i, 1], points[j, 0], points[j, 1])
-            br = configs[i]
-            # The radius along a line is convex: the point closest to the base
-            # decides the inner disc and the elbow limit exactly.
-            if not bad:
-                s_c = (kin.base_x - points[i, 0]) * ux + (kin.base_y - points[i, 1]) * uy
-                if 0.0 < s_c < d:
-                    if ik_point(kin, points[i, 0] + s_c * ux, points[i, 1] + s_c * uy,
-                                br, qs) != 0:
-                        bad = True
-            t_tr = trapezoid_time_nb(d, kv, ka)
-            t_rot = trapezoid_time_nb(abs(wrap_angle(phi[j] - phi[i])), kw, kw_dot)
-            scale = t_tr / max(t_tr, t_rot)  # uniform time scaling of the slower leg
-            worst = 0.0
-            prev0 = q[i, 0]
-            prev1 = q[i, 1]
-            m = 1
-            while not bad and m < n_samples:
-                s = d * m / n_samples
-                if ik_point(kin, points[i, 0] + s * ux, points[i, 1] + s * uy, br, qs) == 1:
-                    bad = True
-                    break
-                # Follow the branch continuously: the joints may not jump by 2 pi.
-                q0 = qs[0] + TWO_PI * round((prev0 - qs[0]) / TWO_PI)
-                q1 = qs[1] + TWO_PI * round((prev1 - qs[1]) / TWO_PI)
-                if not (_within(q0, lo[0], up[0]) and _within(q1, lo[1], up[1])):
-                    bad = True
-                    break
-                prev0 = q0
-                prev1 = q1
-                sdot = scale * min(kv, math.sqrt(2.0 * ka * s), math.sqrt(2.0 * ka * (d - s)))
-                jacobian_point(kin, q0, q1, jac)
-                det = jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0]
-                if det == 0.0:
-                    worst = np.inf
-                else:
-                    qd0 = (jac[1, 1] * ux - jac[0, 1] * uy) * sdot / det
-                    qd1 = (-jac[1, 0] * ux + jac[0, 0] * uy) * sdot / det
-                    worst = max(worst, abs(qd0) / vel[0], abs(qd1) / vel[1])
-                m += 1
-            if not bad:
-                # Arriving at q_j (or q_j + 2 pi n if the joint's range allows) within the limits.
-                q0 = q[j, 0] + TWO_PI * round((prev0 - q[j, 0]) / TWO_PI)
-                q1 = q[j, 1] + TWO_PI * round((prev1 - q[j, 1]) / TWO_PI)
-                if not (_within(q0, lo[0], up[0]) and _within(q1, lo[1], up[1])):
-                    bad = True
-            if bad:
-                infeasible[i, j] = True
-                infeasible[j, i] = True
-                ratio[i, j] = np.inf
-                ratio[j, i] = np.inf
-            else:
-                ratio[i, j] = worst
-                ratio[j, i] = worst
+    for k in range(m):
+        i, j = min(starts[k], ends[k]), max(starts[k], ends[k])
+        if i == j:
+            continue
+        infeasible[k], ratio[k] = _check_leg(i, j, points, q, phi, configs, kin, vel, kv, ka,
+                                             kw, kw_dot, n_samples, qs, jac)
     return infeasible, ratio
 
 

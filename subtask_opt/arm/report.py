@@ -2,9 +2,11 @@
 
 :func:`subtask_opt.solve` answers with search facts (:class:`~subtask_opt.arm.sequencing.Result`);
 for an arm problem the result also carries a :class:`TourReport` built here, which
-describes only the tour that was returned. All-pairs diagnostics of the time model
-(every straight line of the Cartesian models, every line of the ``line`` model) sit
-apart, under :attr:`TourReport.diagnostics`.
+describes only the tour that was returned: a Cartesian model's straight lines are
+checked for the tour's N legs only. All-pairs diagnostics of the time model (every
+straight line of the Cartesian models when the problem asks for them with
+``check_all_legs``, every line of the ``line`` model) sit apart, under
+:attr:`TourReport.diagnostics`.
 """
 
 from __future__ import annotations
@@ -64,17 +66,27 @@ class TourReport:
         """Legs whose straight line the arm cannot drive as promised."""
         return tuple(leg for leg in self.legs if leg.infeasible_line or leg.overspeed > 1.0)
 
+    def leg_counts(self) -> dict[str, Any] | None:
+        """(Cartesian models) how many of the tour's straight legs the arm cannot drive:
+        ``n_legs``, ``n_impossible``, ``n_overspeed`` (feasible but over a joint speed
+        limit) and ``worst_ratio`` (largest joint speed ratio of those); else None."""
+        if self.time_model not in ("paper", "trapezoid"):
+            return None
+        return {"n_legs": len(self.legs),
+                "n_impossible": sum(leg.infeasible_line for leg in self.legs),
+                "n_overspeed": sum(leg.overspeed > 1.0 for leg in self.legs),
+                "worst_ratio": max((leg.overspeed for leg in self.legs), default=0.0)}
+
     def warning(self) -> str | None:
         """One line when a Cartesian model's tour breaks the arm's joint limits."""
-        if self.time_model not in ("paper", "trapezoid") or not self.infeasible:
+        counts = self.leg_counts()
+        if counts is None or not self.infeasible:
             return None
-        impossible = sum(leg.infeasible_line for leg in self.legs)
-        fast = sum(leg.overspeed > 1.0 and not leg.infeasible_line for leg in self.legs)
-        worst = max((leg.overspeed for leg in self.legs), default=0.0)
+        impossible, fast = counts["n_impossible"], counts["n_overspeed"]
         return (f"{impossible + fast} of the tour's {len(self.legs)} straight-line legs break "
                 f"a joint limit ({impossible} impossible as a straight line, {fast} over a "
-                f"joint speed limit, worst x{worst:.2f}); use --time-model joint or line for "
-                "times the arm can achieve")
+                f"joint speed limit, worst x{counts['worst_ratio']:.2f}); use --time-model "
+                "joint or line for times the arm can achieve")
 
     def leg_table(self) -> str:
         """One row per leg: from, to, elbow branches, distance, time, move, notes."""
@@ -101,6 +113,7 @@ class TourReport:
                  "reason": "; ".join(leg.notes) or "straight line over a joint limit",
                  **({"speed_ratio": leg.overspeed} if leg.overspeed > 1.0 else {})}
                 for leg in self.infeasible],
+            "tour_leg_check": self.leg_counts(),
             "diagnostics": self.diagnostics,
         }
 
@@ -113,6 +126,8 @@ def tour_report(problem: SequencingProblem, order: np.ndarray, configurations: n
     points = problem.subtasks.points
     moves = timing.moves(configurations)
     n = len(order)
+    if check is not None:  # the tour's legs only; all pairs when the problem asks
+        outside, ratio = check.legs(order, np.roll(order, -1))
     legs = []
     for i in range(n):
         a, b = int(order[i]), int(order[(i + 1) % n])
@@ -123,11 +138,11 @@ def tour_report(problem: SequencingProblem, order: np.ndarray, configurations: n
         if ca != cb:
             notes.append("elbow change")
         if check is not None:
-            if check.outside_annulus[a, b]:
+            if outside[i]:
                 infeasible = True
                 notes.append("straight line impossible (inner disc, joint limit or elbow change)")
-            elif check.speed_ratio[a, b] > 1.0:
-                overspeed = float(check.speed_ratio[a, b])
+            elif ratio[i] > 1.0:
+                overspeed = float(ratio[i])
                 notes.append(f"joint speed x{overspeed:.2f} over limit")
         if problem.time_model == "line" and ca == cb:
             why = timing.line_failure(a, b, ca, cb)
@@ -138,7 +153,7 @@ def tour_report(problem: SequencingProblem, order: np.ndarray, configurations: n
         legs.append(TourLeg(i, a, b, (ca, cb), float(np.hypot(*(points[a] - points[b]))),
                             float(leg_times[i]), move, tuple(notes), infeasible, overspeed))
     diagnostics: dict[str, Any] = {}
-    if check is not None:
+    if check is not None and problem.check_all_legs:
         diagnostics["all_pairs_leg_check"] = check.to_dict()
     summary = timing.line_summary(order, configurations) if problem.time_model == "line" else None
     if summary is not None:

@@ -62,6 +62,10 @@ def register(root: argparse._SubParsersAction) -> None:
     p.add_argument("--line-fallback", choices=("joint", "exclude"), default="joint",
                    help="line model: drive an infeasible straight line as a joint move "
                         "(default) or forbid it")
+    p.add_argument("--check-all-legs", action="store_true",
+                   help="paper and trapezoid models: check every straight line for the "
+                        "arm's joint limits, not only the tour's legs (JSON diagnostics; "
+                        "N(N-1)/2 lines, seconds at N = 1000)")
     p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
                    help="index of the subtask the tour (or open path) starts at")
     shape = p.add_argument_group("tour shape and constraints")
@@ -128,7 +132,8 @@ def run(args: argparse.Namespace) -> int:
         problem = SequencingProblem(subtasks, arm, time_model=args.time_model, first=args.first,
                                     k=args.k, elbow=args.elbow,
                                     configurations=args.configurations,
-                                    line_fallback=args.line_fallback)
+                                    line_fallback=args.line_fallback,
+                                    check_all_legs=args.check_all_legs)
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     stop = stop_criteria(args)

@@ -193,3 +193,26 @@ def test_default_settings_reach_the_certified_optimum_of_new_40_and_60_subtask_s
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=seed)
     assert result.total_time == pytest.approx(optimum, rel=1e-9)
+
+
+def test_report_checks_the_tour_legs_and_all_pairs_only_when_asked():
+    arm = load_arm("asr_twodof")
+    subtasks = builtin_case("random30", arm, seed=1)
+    problem = SequencingProblem(subtasks, arm, time_model="trapezoid")
+    r = solve(problem, seed=0, stop=MaxGenerations(2))
+    # oracle: the all-pairs check of the same problem read at the tour's legs
+    check = problem.timing.leg_check
+    a, b = r.order, np.roll(r.order, -1)
+    impossible = check.outside_annulus[a, b]
+    over = ~impossible & (check.speed_ratio[a, b] > 1)
+    report = r.report.to_dict()
+    assert [leg["leg"] for leg in report["infeasible_legs"]] == np.flatnonzero(
+        impossible | over).tolist()
+    assert report["tour_leg_check"]["n_impossible"] == int(impossible.sum()) > 0
+    assert report["tour_leg_check"]["n_overspeed"] == int(over.sum())
+    assert "all_pairs_leg_check" not in report["diagnostics"]
+    asked = SequencingProblem(subtasks, arm, time_model="trapezoid", check_all_legs=True)
+    diag = solve(asked, seed=0, stop=MaxGenerations(2)).report.diagnostics
+    assert diag["all_pairs_leg_check"]["n_infeasible"] == check.n_infeasible
+    with pytest.raises(ParameterError, match="check_all_legs"):
+        SequencingProblem(subtasks, arm, time_model="trapezoid", check_all_legs=1)

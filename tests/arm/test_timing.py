@@ -410,3 +410,27 @@ def test_explicit_configurations() -> None:
         travel_times(s, arm, "joint", configurations=[1, 0])
     with pytest.raises(ParameterError, match="configurations must be 3 values"):
         travel_times(s, arm, "joint", configurations=[1, 0, 2])
+
+
+def test_leg_check_of_named_legs_equals_all_pairs() -> None:
+    """Checking only some legs (a tour, reversed legs, a stay) reads the all-pairs arrays."""
+    arm = _arm("asr_twodof")
+    lc = travel_times(builtin_case("random30", arm, seed=3), arm, "trapezoid").leg_check
+    rng = np.random.default_rng(0)
+    tour = rng.permutation(30)
+    starts = np.concatenate([tour, rng.integers(0, 30, 40), [5]])
+    ends = np.concatenate([np.roll(tour, -1), rng.integers(0, 30, 40), [5]])
+    outside, ratio = lc.legs(starts, ends)
+    assert outside.shape == ratio.shape == (71,)
+    assert np.array_equal(outside, lc.outside_annulus[starts, ends])
+    assert np.array_equal(ratio, lc.speed_ratio[starts, ends])
+    assert outside.any() and (ratio[~outside] > 1).any()  # both kinds of finding are covered
+
+
+@pytest.mark.parametrize("starts, ends", [([0, 1], [1]), ([0, 30], [1, 2]), ([-1], [2]),
+                                          ([0.0], [1.0]), ([[0]], [[1]])])
+def test_leg_check_rejects_bad_legs(starts: list, ends: list) -> None:
+    arm = _arm("asr_twodof")
+    lc = travel_times(builtin_case("random30", arm, seed=3), arm, "trapezoid").leg_check
+    with pytest.raises(ParameterError, match=r"LegCheck.legs .*\[0, 29\]"):
+        lc.legs(starts, ends)

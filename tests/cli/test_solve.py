@@ -98,3 +98,19 @@ def test_infinite_coordinates_exit_2(tmp_path, capsys):
     assert main(["solve", "--case", str(csv)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "inf" in err.lower()
+
+
+def test_trapezoid_json_checks_the_tour_legs_and_all_pairs_on_request(tmp_path):
+    out = tmp_path / "r.json"
+    argv = ["solve", "--case", "random30", "--robot", "asr_twodof", "--time-model",
+            "trapezoid", "--max-generations", "3", "--quiet", "--json", str(out)]
+    assert main(argv) == 0
+    report = json.loads(out.read_text())["report"]
+    counts = report["tour_leg_check"]
+    assert counts["n_legs"] == 30
+    assert counts["n_impossible"] + counts["n_overspeed"] == len(report["infeasible_legs"]) > 0
+    assert "all_pairs_leg_check" not in report["diagnostics"]
+    assert main([*argv, "--check-all-legs"]) == 0
+    all_pairs = json.loads(out.read_text())["report"]["diagnostics"]["all_pairs_leg_check"]
+    assert all_pairs["n_legs"] == 30 * 29 // 2
+    assert all_pairs["n_infeasible"] >= counts["n_impossible"]

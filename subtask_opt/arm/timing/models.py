@@ -39,12 +39,14 @@ of *configurations* (:attr:`TimingResult.branch_times`), from which
 
 The Cartesian models drive a straight line that the arm may not be able to
 follow: :class:`LegCheck` reports the legs that leave the workspace of their
-elbow branch and the joint speeds each leg needs.
+elbow branch and the joint speeds each leg needs (the legs asked for, e.g. a
+tour's, or all pairs on demand).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -111,16 +113,79 @@ class LegCheck:
     also for the ``paper`` model, whose own timing is not a realisable
     profile), sampled along the line with IK on the endpoints' elbow branch.
 
+    Nothing is computed on construction: :meth:`legs` checks the legs you name
+    (a tour's N legs: what :func:`subtask_opt.solve` reports), the all-pairs
+    arrays and counts below check all N (N - 1) / 2 legs on first use (at
+    N = 1000 about a hundred times the cost of the travel-time matrix).
+
     Attributes:
-        outside_annulus: (N, N) bool, True where the straight line leaves the
-            reachable annulus, passes a joint limit, or would have to change
-            elbow branch (endpoints on different branches).
-        speed_ratio: (N, N) max over samples and joints of |q_dot| / velocity
-            limit (inf where ``outside_annulus``; 0 on the diagonal).
+        arm: the robot.
+        points: (N, 2) subtask positions.
+        joints: (N, 2) joint angles at each subtask on its branch.
+        tool_angles: (N,) tool angles of the time model (rad).
+        configurations: (N,) elbow branch of each subtask.
+        n_samples: samples per leg (>= 2).
     """
 
-    outside_annulus: np.ndarray
-    speed_ratio: np.ndarray
+    arm: Arm
+    points: np.ndarray
+    joints: np.ndarray
+    tool_angles: np.ndarray
+    configurations: np.ndarray
+    n_samples: int = 64
+
+    def legs(self, starts: Any, ends: Any) -> tuple[np.ndarray, np.ndarray]:
+        """``(outside_annulus, speed_ratio)`` of the legs ``starts[k] -> ends[k]``, each (M,).
+
+        The entries the all-pairs arrays hold at ``[starts[k], ends[k]]``, computed
+        for these legs only.
+
+        Raises:
+            ParameterError: ``starts`` and ``ends`` are not equal-length index
+                vectors in [0, N - 1].
+        """
+        n = self.points.shape[0]
+        a = np.asarray(starts)
+        b = np.asarray(ends)
+        if (a.ndim != 1 or a.shape != b.shape or a.dtype.kind not in "iu"
+                or b.dtype.kind not in "iu" or (a.size and (
+                    min(a.min(), b.min()) < 0 or max(a.max(), b.max()) >= n))):
+            raise ParameterError(f"LegCheck.legs needs two equal-length vectors of subtask "
+                                 f"indices in [0, {n - 1}], got {starts!r} and {ends!r}")
+        cl = self.arm.cartesian_limits
+        # writable copies (O(N)): the kernel's one compiled signature
+        return _k.leg_check(np.array(self.points, dtype=np.float64),
+                            np.array(self.joints, dtype=np.float64),
+                            np.array(self.tool_angles, dtype=np.float64),
+                            np.array(self.configurations, dtype=np.int64), self.arm.kinematics,
+                            np.array(self.arm.joint_limits.velocity, dtype=np.float64),
+                            cl.kv, cl.ka, cl.kw, cl.kw_dot, self.n_samples,
+                            a.astype(np.int64), b.astype(np.int64))
+
+    @cached_property
+    def _all_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        n = self.points.shape[0]
+        iu, ju = np.triu_indices(n, 1)
+        bad, ratio = self.legs(iu, ju)
+        outside = np.zeros((n, n), dtype=bool)
+        speed = np.zeros((n, n))
+        outside[iu, ju] = outside[ju, iu] = bad
+        speed[iu, ju] = speed[ju, iu] = ratio
+        outside.setflags(write=False)
+        speed.setflags(write=False)
+        return outside, speed
+
+    @property
+    def outside_annulus(self) -> np.ndarray:
+        """(N, N) bool, True where the straight line leaves the reachable annulus,
+        passes a joint limit, or would have to change elbow branch (all pairs)."""
+        return self._all_pairs[0]
+
+    @property
+    def speed_ratio(self) -> np.ndarray:
+        """(N, N) max over samples and joints of |q_dot| / velocity limit (inf where
+        ``outside_annulus``; 0 on the diagonal; all pairs)."""
+        return self._all_pairs[1]
 
     def _upper(self) -> np.ndarray:
         n = self.speed_ratio.shape[0]
@@ -308,7 +373,8 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
             preferred branch cannot reach within the joint limits uses the other.
         configurations: optional (N,) explicit branch (0/1) per subtask,
             overriding ``elbow``; each must reach its subtask.
-        check_legs: run the :class:`LegCheck` (Cartesian models only).
+        check_legs: attach a :class:`LegCheck` (Cartesian models only; it checks
+            legs when asked, nothing here).
         n_samples: samples per straight leg in the check (>= 2).
         line_fallback: (``line``) ``"joint"`` drives an infeasible line as a
             joint move, ``"exclude"`` gives it an infinite time.
@@ -354,7 +420,6 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
         phi = np.ascontiguousarray(_k.fk_batch(arm.kinematics, q)[:, 2])
 
     cl = arm.cartesian_limits
-    jl = arm.joint_limits
     leg_check = None
     extra: dict[str, Any] = {}
     if model in ("joint", "line"):
@@ -365,13 +430,10 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
         matrix = _k.cartesian_matrix(points, phi, configs, arm.kinematics, cl.kv, cl.ka, cl.kw,
                                      cl.kw_dot, model == "paper", float(k),
                                      subtasks.theta is not None)
-        if check_legs:
-            outside, ratio = _k.leg_check(points, q, phi, configs, arm.kinematics,
-                                          np.array(jl.velocity), cl.kv, cl.ka, cl.kw,
-                                          cl.kw_dot, n_samples)
-            leg_check = LegCheck(outside, ratio)
-    for arr in (matrix, configs, q, phi, *extra.values()):
+    for arr in (matrix, points, configs, q, phi, *extra.values()):
         arr.setflags(write=False)
+    if check_legs and model in ("paper", "trapezoid"):
+        leg_check = LegCheck(arm, points, q, phi, configs, n_samples)
     if model == "line":
         extra.update(line_fallback=line_fallback, line_grid=line_grid)
     return TimingResult(matrix, model, configs, leg_check, q, phi, **extra)

@@ -1,0 +1,374 @@
+"""Held-out acceptance: does the default solve() reach the certified optimum, and how fast?
+
+Instances, for each robot (the planar arms ``planar_2r`` and ``asr_twodof``) and
+each time model (``trapezoid``: fixed elbow configurations, a TSP; ``joint``:
+the default ``configurations="optimize"``, order and elbow branch chosen together,
+a generalised TSP over 2 configurations per subtask; ``joint-fixed``: the joint
+model at fixed elbow-down configurations, a TSP):
+
+* the built-in ``square20`` and ``random30`` from generator seeds 0..9 (the cases
+  the defaults were tuned on);
+* ``--sets`` new sets of 40 and of 60 random subtasks in the arm's reachable
+  workspace (:func:`subtask_opt.arm.tasks.random_subtasks`, seeds
+  ``--set-seed + k``), never used for tuning.
+
+Each optimum is certified once, not taken from our runs: the TSP by the subtour-cut
+MILP (:func:`subtask_opt.milp_optimum`), the GTSP by the MILP below (one
+configuration per subtask, degree 2 at the chosen configurations, cuts across
+every set of subtasks a subtour closes), both with HiGHS; a GTSP not proven within
+``--gtsp-time-limit`` is judged against the best answer known (ours or elkai's) and
+flagged in the table. The default
+``solve()`` then runs from seeds 0..``--seeds - 1``; a run hits when its time is
+within a relative 1e-9 of the optimum.
+
+elkai (LKH-3, its defaults: 10 runs) solves the same instances: the TSP matrix
+scaled to integers (the longest leg 1e5 units), and the GTSP through its Noon-Bean
+ATSP (:func:`subtask_opt.arm.peers.noon_bean_matrix`; one node per configuration
+a subtask's branch reaches), its tour read back as an order and one configuration
+per subtask. An elkai answer hits when its true time is within a relative 1e-6 of
+the optimum (the integer rounding blurs finer differences).
+
+Times are wall times per call after JIT warm-up: for us the whole ``solve()``
+(Held-Karp bound, search, report), for elkai the call on the prepared matrix. The
+machine is shared and noisy: compare medians within one run.
+
+    python benchmarks/heldout.py [--seeds 20] [--sets 5] [--set-seed 5000]
+        [--robots planar_2r asr_twodof] [--models trapezoid joint joint-fixed]
+        [--gtsp-time-limit 60]
+        [--peer-repeats 3] [--json out/heldout.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from subtask_opt import SequencingProblem, builtin_case, load_arm, milp_optimum, solve
+from subtask_opt.arm.exact import _components, _walk, tour_length
+from subtask_opt.arm.peers import noon_bean_matrix
+from subtask_opt.arm.tasks import random_subtasks
+from subtask_opt.base.files import quiet_stdout
+from subtask_opt.base.progress import progress_bar
+
+REL_TOL = 1e-9
+PEER_TOL = 1e-6
+
+
+def instances(arm_name: str, model: str, sets: int, set_seed: int
+              ) -> list[tuple[str, str, SequencingProblem]]:
+    """(family, name, problem) of every instance of one robot and time model."""
+    arm = load_arm(arm_name)
+    subtask_sets = [("square20", "square20", builtin_case("square20", arm))]
+    subtask_sets += [("random30", f"random30/{g}", builtin_case("random30", arm, seed=g))
+                     for g in range(10)]
+    for n in (40, 60):
+        subtask_sets += [(f"random{n}", f"random{n}/{set_seed + k}",
+                          random_subtasks(arm, n, seed=set_seed + k))
+                         for k in range(sets)]
+    time_model, _, fixed = model.partition("-")
+    return [(family, name, SequencingProblem(sub, arm, time_model=time_model,
+                                             configurations=fixed or None))
+            for family, name, sub in subtask_sets]
+
+
+def _configuration_nodes(problem: SequencingProblem) -> tuple[np.ndarray, np.ndarray,
+                                                                np.ndarray]:
+    """(cost between configuration nodes, subtask of each node, branch of each node)."""
+    t = problem.timing.branch_times
+    assert t is not None
+    n = t.shape[0]
+    reach = np.isfinite(problem.timing.branch_joints).all(axis=2)  # (N, 2)
+    sub, branch = np.nonzero(reach)  # grouped by subtask, as Noon-Bean needs
+    cost = t[sub[:, None], branch[:, None], sub[None, :], branch[None, :]]
+    assert np.all(np.isfinite(cost)) and np.allclose(cost, cost.T, rtol=1e-12, atol=0.0)
+    assert np.array_equal(np.unique(sub), np.arange(n))
+    return cost, sub, branch
+
+
+def _min_cut(w: np.ndarray) -> tuple[float, np.ndarray]:
+    """Stoer-Wagner global minimum cut of the symmetric weights ``w``: (value, one side)."""
+    w = w.astype(float).copy()
+    n = len(w)
+    members = [[v] for v in range(n)]
+    alive = list(range(n))
+    best, best_side = np.inf, np.array([0])
+    while len(alive) > 1:
+        rest = alive[1:]
+        key = w[alive[0], rest].copy()  # weight from the vertices added so far
+        prev = last = alive[0]
+        while rest:  # add the most tightly connected vertex
+            k = int(np.argmax(key))
+            prev, last = last, rest.pop(k)
+            cut = float(key[k])
+            key = np.delete(key, k) + (w[last, rest] if rest else 0.0)
+        if cut < best:
+            best, best_side = cut, np.array(members[last])
+        w[prev, :] += w[last, :]  # merge the last two vertices of the phase
+        w[:, prev] += w[:, last]
+        w[prev, prev] = 0.0
+        members[prev] += members[last]
+        alive.remove(last)
+    return best, best_side
+
+
+def gtsp_optimum(problem: SequencingProblem, time_limit: float = 60.0, max_rounds: int = 500
+                 ) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """Certified minimum time of a configured (GTSP) closed tour, by MILP with HiGHS.
+
+    Binary x_e per edge between configurations of different subtasks, y_v per
+    configuration: one configuration per subtask, degree 2 y_v at each. Subtour
+    cuts x(delta(S)) >= 2 over sets S of subtasks (valid: the tour enters and
+    leaves every proper subset of subtasks): first on the LP relaxation (its
+    support's components, then the global minimum cut of the subtask graph), then
+    on each integer solution's subtours until it is one tour.
+
+    Returns ``(time, order, configurations)``, or None if not proven within
+    ``time_limit`` seconds.
+    """
+    import highspy
+
+    cost, sub, branch = _configuration_nodes(problem)
+    m, n = len(sub), int(sub.max()) + 1
+    iu, ju = np.triu_indices(m, 1)
+    keep = sub[iu] != sub[ju]
+    iu, ju = iu[keep], ju[keep]
+    n_edges = len(iu)
+    with quiet_stdout():
+        h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    h.setOptionValue("mip_rel_gap", 0.0)
+    n_cols = n_edges + m
+    h.addCols(n_cols, np.concatenate([cost[iu, ju], np.zeros(m)]), np.zeros(n_cols),
+              np.ones(n_cols), 0, np.array([], dtype=np.int32), np.array([], dtype=np.int32),
+              np.array([]))
+    for i in range(n):  # one configuration per subtask
+        idx = (n_edges + np.flatnonzero(sub == i)).astype(np.int32)
+        h.addRow(1.0, 1.0, len(idx), idx, np.ones(len(idx)))
+    for v in range(m):  # degree 2 at a chosen configuration, 0 elsewhere
+        idx = np.concatenate([np.flatnonzero((iu == v) | (ju == v)), [n_edges + v]])
+        h.addRow(0.0, 0.0, len(idx), idx.astype(np.int32),
+                 np.concatenate([np.ones(len(idx) - 1), [-2.0]]))
+
+    def cut(subtasks: np.ndarray) -> None:
+        inside = np.isin(sub, subtasks)
+        idx = np.flatnonzero(inside[iu] != inside[ju]).astype(np.int32)
+        h.addRow(2.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
+
+    deadline = time.perf_counter() + time_limit
+
+    def run() -> np.ndarray:
+        h.setOptionValue("time_limit", max(1e-3, deadline - time.perf_counter()))
+        h.run()
+        if h.getModelStatus() == highspy.HighsModelStatus.kTimeLimit:
+            raise TimeoutError
+        if h.getModelStatus() != highspy.HighsModelStatus.kOptimal:
+            raise RuntimeError(f"HiGHS: {h.modelStatusToString(h.getModelStatus())}")
+        return np.asarray(h.getSolution().col_value)[:n_edges]
+
+    try:
+        x = _cut_rounds(run, cut, n, sub[iu], sub[ju], h, n_cols, max_rounds)
+    except TimeoutError:
+        return None
+    order = _walk(n, sub[iu[x]], sub[ju[x]])
+    configurations = np.zeros(n, dtype=np.int64)
+    chosen = np.unique(np.concatenate([iu[x], ju[x]]))
+    configurations[sub[chosen]] = branch[chosen]
+    return float(cost[iu[x], ju[x]].sum()), order, configurations
+
+
+def _cut_rounds(run: Callable[[], np.ndarray], cut: Callable[[np.ndarray], None], n: int,
+                a: np.ndarray, b: np.ndarray, h: Any, n_cols: int,
+                max_rounds: int) -> np.ndarray:
+    """The subtour cuts of :func:`gtsp_optimum` (edges join subtasks ``a[e]``, ``b[e]``):
+    rounds on the LP relaxation, then integer rounds; the tour's edge mask."""
+    import highspy
+
+    for _ in range(max_rounds):
+        w = np.zeros((n, n))
+        np.add.at(w, (a, b), run())
+        w = w + w.T
+        comps = _components(n, *np.nonzero(np.triu(w > 1e-9, 1)))
+        if len(comps) > 1:
+            for comp in comps:
+                cut(np.array(comp))
+            continue
+        value, side = _min_cut(w)
+        if value >= 2.0 - 1e-6:
+            break
+        cut(side)
+    h.changeColsIntegrality(n_cols, np.arange(n_cols, dtype=np.int32),
+                            np.full(n_cols, highspy.HighsVarType.kInteger))
+    for _ in range(max_rounds):
+        x = run() > 0.5
+        comps = _components(n, a[x], b[x])
+        if len(comps) == 1:
+            return x
+        for comp in comps:
+            cut(np.array(comp))
+    raise RuntimeError(f"gtsp_optimum: no single tour after {max_rounds} rounds of cuts")
+
+
+def certify(problem: SequencingProblem, time_limit: float) -> float | None:
+    """The certified optimum (None: the GTSP MILP did not finish within ``time_limit``)."""
+    if problem.optimizes_configurations:
+        found = gtsp_optimum(problem, time_limit)
+        return None if found is None else found[0]
+    return milp_optimum(problem.matrix)[0]
+
+
+def run_ours(problem: SequencingProblem, seeds: int) -> dict:
+    costs, walls, searches, generations = [], [], [], []
+    for seed in range(seeds):
+        t = time.perf_counter()
+        r = solve(problem, seed=seed)
+        walls.append(time.perf_counter() - t)
+        searches.append(r.runtime_s)
+        costs.append(r.total_time)
+        generations.append(r.generations)
+    return {"costs": costs, "wall_s": walls, "search_s": searches, "generations": generations}
+
+
+def _elkai_tour(matrix: list[list[int]]) -> np.ndarray:
+    import elkai
+
+    return np.asarray(elkai.DistanceMatrix(matrix).solve_tsp()[:-1], dtype=np.int64)
+
+
+def run_elkai(problem: SequencingProblem, repeats: int) -> dict:
+    """elkai on the TSP matrix or on the GTSP's Noon-Bean ATSP (see the module doc)."""
+    if problem.optimizes_configurations:
+        cost, sub, _ = _configuration_nodes(problem)
+        n = int(sub.max()) + 1
+        # LKH's ATSP transform needs arcs below INT_MAX / 2 / PRECISION (as in peers.elkai_gtsp)
+        matrix, _, _ = noon_bean_matrix(cost, sub, resolution=2e6 / (n + 2))
+    else:
+        m = problem.matrix
+        matrix = np.rint(m / m.max() * 1e5).astype(np.int64)
+    rows = matrix.tolist()
+    times, costs = [], []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        tour = _elkai_tour(rows)
+        times.append(time.perf_counter() - t)
+        if problem.optimizes_configurations:
+            entries = [int(u) for k, u in enumerate(tour) if sub[u] != sub[tour[k - 1]]]
+            order, nodes = sub[entries], np.array(entries)
+            assert np.array_equal(np.sort(order), np.arange(n)), "not one visit per subtask"
+            nxt = np.roll(nodes, -1)
+            costs.append(float(cost[nodes, nxt].sum()))
+        else:
+            costs.append(tour_length(problem.matrix, tour))
+    return {"costs": costs, "wall_s": times}
+
+
+def _judge(row: dict) -> None:
+    """Hits against the certified optimum, or (GTSP not proven) the best answer known."""
+    ref = row["optimum"]
+    if ref is None:
+        ref = min(row["ours"]["costs"] + row["elkai"]["costs"])
+        row["reference"] = "best known"
+    else:
+        assert min(row["ours"]["costs"]) >= ref * (1 - REL_TOL), "below the certified optimum"
+        row["reference"] = "certified"
+    row["ref"] = ref
+    for who, tol in (("ours", REL_TOL), ("elkai", PEER_TOL)):
+        costs = row[who]["costs"]
+        row[who]["hits"] = sum(c <= ref * (1 + tol) for c in costs)
+        row[who]["runs"] = len(costs)
+        row[who]["excess"] = [c / ref - 1 for c in costs]
+
+
+def _ms(values: list[float]) -> float:
+    return statistics.median(values) * 1e3 if values else float("nan")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", type=int, default=20, help="solve() seeds per instance")
+    ap.add_argument("--sets", type=int, default=5, help="new 40- and 60-subtask sets each")
+    ap.add_argument("--set-seed", type=int, default=5000, help="seed of the first new set")
+    ap.add_argument("--robots", nargs="+", default=["planar_2r", "asr_twodof"])
+    ap.add_argument("--models", nargs="+", default=["trapezoid", "joint"],
+                    choices=("trapezoid", "joint", "joint-fixed"),
+                    help="joint: elbow branches chosen (GTSP); joint-fixed: elbow-down")
+    ap.add_argument("--gtsp-time-limit", type=float, default=60.0,
+                    help="seconds the GTSP MILP may take per instance; unproven instances "
+                         "are judged against the best answer known (flagged)")
+    ap.add_argument("--peer-repeats", type=int, default=3)
+    ap.add_argument("--json", type=Path)
+    args = ap.parse_args()
+
+    cases = [(robot, model, *case) for robot in args.robots for model in args.models
+             for case in instances(robot, model, args.sets, args.set_seed)]
+    for robot in args.robots:  # JIT / cache load of each kind, before any timed call
+        for model in args.models:
+            solve(instances(robot, model, 0, 0)[1][2], seed=0)
+    rows = []
+    with progress_bar(True, total=len(cases), desc="instances") as bar:
+        for robot, model, family, name, problem in cases:
+            t = time.perf_counter()
+            optimum = certify(problem, args.gtsp_time_limit)
+            certify_s = time.perf_counter() - t
+            row = {"robot": robot, "model": model, "family": family, "instance": name,
+                   "n": problem.size, "optimum": optimum, "certify_s": certify_s,
+                   "ours": run_ours(problem, args.seeds),
+                   "elkai": run_elkai(problem, args.peer_repeats)}
+            _judge(row)
+            rows.append(row)
+            bar.update()
+
+    print(f"\nheld-out acceptance: default solve() from {args.seeds} seeds per instance; "
+          f"new sets from seed {args.set_seed}; elkai x{args.peer_repeats} per instance")
+    head = (f"{'robot':<11} {'model':<9} {'instances':<22} {'ours hit':>10} {'med ms':>8} "
+            f"{'p90 ms':>8} | {'elkai hit':>9} {'med ms':>8} | {'certify s':>9}")
+    print(head)
+    print("-" * len(head))
+    for robot in args.robots:
+        for model in args.models:
+            for family in ("square20", "random30", "random40", "random60"):
+                sel = [r for r in rows if (r["robot"], r["model"], r["family"])
+                       == (robot, model, family)]
+                if not sel:
+                    continue
+                hits = sum(r["ours"]["hits"] for r in sel)
+                runs = sum(r["ours"]["runs"] for r in sel)
+                walls = [w for r in sel for w in r["ours"]["wall_s"]]
+                ehits = sum(r["elkai"]["hits"] for r in sel)
+                eruns = sum(r["elkai"]["runs"] for r in sel)
+                ewalls = [w for r in sel for w in r["elkai"]["wall_s"]]
+                proven = sum(r["reference"] == "certified" for r in sel)
+                label = family + (f" x{len(sel)}" if len(sel) > 1 else "")
+                if proven < len(sel):
+                    label += f" ({proven} cert.)"
+                print(f"{robot:<11} {model:<9} {label:<22} {hits:>5}/{runs:<4} "
+                      f"{_ms(walls):>8.1f} {np.percentile(walls, 90) * 1e3:>8.1f} | "
+                      f"{ehits:>4}/{eruns:<4} {_ms(ewalls):>8.1f} | "
+                      f"{sum(r['certify_s'] for r in sel):>9.2f}")
+    hits = sum(r["ours"]["hits"] for r in rows)
+    runs = sum(r["ours"]["runs"] for r in rows)
+    print(f"\ndefault solve(): {hits}/{runs} runs at the certified optimum "
+          f"(relative {REL_TOL:g}); elkai: {sum(r['elkai']['hits'] for r in rows)}/"
+          f"{sum(r['elkai']['runs'] for r in rows)} (relative {PEER_TOL:g})")
+    for r in rows:
+        for seed, excess in enumerate(r["ours"]["excess"]):
+            if excess > REL_TOL:
+                print(f"  miss: {r['robot']} {r['model']} {r['instance']} seed {seed}: "
+                      f"+{100 * excess:.4f}% ({r['reference']}) after "
+                      f"{r['ours']['generations'][seed]} generations")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({
+            "seeds": args.seeds, "sets": args.sets, "set_seed": args.set_seed,
+            "rel_tol": REL_TOL, "peer_tol": PEER_TOL, "rows": rows}, indent=1))
+        print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
