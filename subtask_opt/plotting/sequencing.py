@@ -133,16 +133,18 @@ def tour_legs(problem: SequencingProblem, order: Any, configurations: Any = None
     q_both = problem.arm.ik(pts)  # (N, 2 branches, 2)
     moves = timing.moves(configs)
     check = timing.leg_check
+    n = len(order)
+    if moves is None and check is not None:  # the tour's legs only, not all pairs
+        outside, ratio = check.legs(order, np.roll(order, -1))
     s = np.linspace(0.0, 1.0, samples)[:, None]
     legs = []
-    n = len(order)
     for k in range(n):
         a, b = int(order[k]), int(order[(k + 1) % n])
         ca, cb = int(configs[a]), int(configs[b])
         straight = moves is None or int(moves[a, b]) == 1
         infeasible = False
         if moves is None and check is not None:
-            infeasible = bool(check.outside_annulus[a, b] or check.speed_ratio[a, b] > 1.0)
+            infeasible = bool(outside[k] or ratio[k] > 1.0)
         elif problem.time_model == "line":
             infeasible = timing.line_failure(a, b, ca, cb) is not None
         if straight:
