@@ -315,3 +315,58 @@ def test_make_aux_holds_the_neighbour_table_as_integers():
     aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=4)
     assert aux.neighbours.dtype == np.int64 and aux.neighbours.shape == (10, 4)
     np.testing.assert_array_equal(aux.neighbours, neighbour_table(m, 4))
+
+
+def _segment_exchange_improvable(tour: np.ndarray, m: np.ndarray) -> bool:
+    """Any three cut edges i < j < k whose blocks t[i+1..j], t[j+1..k] swapped shorten the
+    tour (every segment exchange, by enumeration)."""
+    n = len(tour)
+    base = tour_cost(tour, n, m, None)
+    for i in range(n - 2):
+        for j in range(i + 1, n - 1):
+            for k in range(j + 1, n):
+                cand = np.concatenate([tour[:i + 1], tour[j + 1:k + 1], tour[i + 1:j + 1],
+                                       tour[k + 1:]])
+                if tour_cost(cand, n, m, None) < base - 1e-9:
+                    return True
+    return False
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 40))
+def test_segment_exchange_moves_report_their_cost_change(seed, n):
+    from subtask_opt.ga.permutation import _segment_exchange_move
+
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n) + rng.random((n, n))
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=6)
+    tour = rng.permutation(n).astype(np.int64)
+    w = _work_on(tour)
+    moved = 0
+    for _ in range(30):
+        before = m[tour, np.roll(tour, -1)].sum()
+        gain = _segment_exchange_move(int(rng.integers(0, n)), tour, w, n, m, aux.neighbours)
+        after = m[tour, np.roll(tour, -1)].sum()
+        assert _is_permutation(tour, n)
+        np.testing.assert_array_equal(w.pos[tour], np.arange(n))
+        assert before - after == pytest.approx(gain, abs=1e-9)
+        moved += gain > 0
+    assert moved > 0  # a random tour has improving exchanges; the test must exercise them
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 16))
+def test_asymmetric_neighbour_search_leaves_no_improving_segment_exchange(seed, n):
+    from subtask_opt.ga.permutation import asymmetric_neighbour_search
+
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n) + rng.random((n, n))
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=n - 1,
+                   search=SEARCH_EXACT)
+    tour = rng.permutation(n).astype(np.int64)
+    before = tour_cost(tour, n, m, aux)
+    asymmetric_neighbour_search(tour, n, m, aux)
+    assert _is_permutation(tour, n)
+    assert tour_cost(tour, n, m, aux) <= before + 1e-12
+    assert not _segment_exchange_improvable(tour, m)
+    assert tour_cost(tour[::-1].copy(), n, m, aux) >= tour_cost(tour, n, m, aux) - 1e-9
