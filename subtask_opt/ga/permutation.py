@@ -21,8 +21,9 @@ chromosome type):
   on neighbour lists, with don't-look bits (a queue of active cities);
 * :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and a
   local search of segment exchanges and Or-opt moves on neighbour lists (moves
-  that keep every direction of travel, so their cost change is exact) with
-  don't-look bits, finished on short tours by an exact full sweep.
+  that keep every direction of travel, so their cost change is exact) and short
+  2-opt flips (the reversed path's cost summed) with don't-look bits, finished on
+  short tours by an exact full sweep.
 
 :func:`randomize`, :func:`crossover` and :func:`improve` are the operators the
 GA dispatch registers; they branch on ``aux.search``.
@@ -767,6 +768,55 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
     return 0.0
 
 
+ASYMMETRIC_FLIP = 150
+"""Longest path the asymmetric 2-opt move reverses (its cost change is a sum along it, so
+the bound keeps a move's price O(1) in N; in benchmarks/growth.py --asymmetric, 50 gave
+1-2% longer tours at N = 200 to 1600 and no bound twice the time at N = 1600)."""
+
+
+@njit(cache=True)
+def _asymmetric_two_opt_move(t1, genes, w, n, data, nb):
+    """Apply the first improving 2-opt move that removes an edge at ``t1`` and reverses
+    a path of at most :data:`ASYMMETRIC_FLIP` cities (and at most half the tour, so the
+    flip never takes the complement, which would drive the tour backwards), the new
+    edge at t2 joining one of its nearest cities. Exact for asymmetric costs: the
+    reversed path's cost is summed. Writes the cities it touched into ``touched``;
+    returns the gain (0.0: none)."""
+    eps = 1e-10
+    k_nb = nb.shape[1]
+    pos = w.pos
+    longest = min(ASYMMETRIC_FLIP, n // 2)
+    for side in range(2):
+        s = 1 if side == 0 else -1
+        t2 = genes[(pos[t1] + s) % n]
+        d12 = data[t1, t2] if s == 1 else data[t2, t1]
+        for a in range(k_nb):
+            t3 = nb[t2, a]
+            if min(data[t2, t3], data[t3, t2]) >= d12 - eps:
+                break
+            steps = ((pos[t3] - pos[t2]) * s) % n  # the path t2 .. t4 has `steps` cities
+            if t3 == t1 or steps < 2 or steps > longest:
+                continue
+            t4 = genes[(pos[t3] - s) % n]
+            first = pos[t2] if s == 1 else pos[t4]  # the path in array order
+            turn = 0.0  # its cost backwards minus forwards
+            for k in range(steps - 1):
+                u = genes[(first + k) % n]
+                v = genes[(first + k + 1) % n]
+                turn += data[v, u] - data[u, v]
+            if s == 1:  # t1 t2 .. t4 t3 -> t1 t4 .. t2 t3
+                gain = d12 + data[t4, t3] - data[t1, t4] - data[t2, t3] - turn
+            else:  # t3 t4 .. t2 t1 -> t3 t2 .. t4 t1
+                gain = d12 + data[t3, t4] - data[t3, t2] - data[t4, t1] - turn
+            if gain > eps:
+                _flip(genes, w, n, first, (first + steps - 1) % n)
+                touched = w.touched
+                touched[0], touched[1], touched[2] = t1, t2, t3
+                touched[3], touched[4], touched[5] = t4, t1, t2
+                return gain
+    return 0.0
+
+
 class _Work(NamedTuple):
     """Scratch space of the local search."""
 
@@ -793,7 +843,7 @@ def _work(genes, n):
 def _polish(genes, n, data, aux, w, symmetric):
     """Improve from the queued cities until no queued city has an improving move;
     return the total gain. Symmetric costs: LK-style moves, then Or-opt; else
-    segment exchanges and Or-opt without reversal (every direction kept)."""
+    segment exchanges, short 2-opt flips priced exactly, and Or-opt without reversal."""
     nb = aux.neighbours
     max_seg = min(aux.max_segment, n - 3)
     gain_total = 0.0
@@ -811,6 +861,8 @@ def _polish(genes, n, data, aux, w, symmetric):
             gain = _three_opt_move(a, genes, w, n, data, nb)
         else:
             gain = _segment_exchange_move(a, genes, w, n, data, nb)
+            if gain <= 0.0:
+                gain = _asymmetric_two_opt_move(a, genes, w, n, data, nb)
         if gain > 0.0:
             moved = 6
         if moved == 0:
@@ -855,9 +907,10 @@ full sweep of :func:`exact_local_search`."""
 
 @njit(cache=True)
 def asymmetric_neighbour_search(genes, length, data, aux):
-    """Segment exchanges and Or-opt without reversal on neighbour lists, and driving the
-    tour backwards, until a pass from every city finds nothing: any costs, O(N K^2) per
-    pass. With full neighbour lists no segment exchange improves the result."""
+    """Segment exchanges, short 2-opt flips and Or-opt without reversal on neighbour
+    lists, and driving the tour backwards, until a pass from every city finds nothing:
+    any costs, O(N K^2) per pass. With full neighbour lists no segment exchange improves
+    the result."""
     n = length
     if n < 8:
         return exact_local_search(genes, length, data, aux)

@@ -333,10 +333,12 @@ def _segment_exchange_improvable(tour: np.ndarray, m: np.ndarray) -> bool:
 
 
 @settings(max_examples=40, deadline=None)
-@given(seed=st.integers(0, 10_000), n=st.integers(8, 40))
-def test_segment_exchange_moves_report_their_cost_change(seed, n):
-    from subtask_opt.ga.permutation import _segment_exchange_move
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 40), flip=st.booleans())
+def test_asymmetric_moves_report_their_cost_change(seed, n, flip):
+    # segment exchanges and short 2-opt flips on an asymmetric matrix
+    from subtask_opt.ga.permutation import _asymmetric_two_opt_move, _segment_exchange_move
 
+    move = _asymmetric_two_opt_move if flip else _segment_exchange_move
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n) + rng.random((n, n))
     aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=6)
@@ -345,7 +347,7 @@ def test_segment_exchange_moves_report_their_cost_change(seed, n):
     moved = 0
     for _ in range(30):
         before = m[tour, np.roll(tour, -1)].sum()
-        gain = _segment_exchange_move(int(rng.integers(0, n)), tour, w, n, m, aux.neighbours)
+        gain = move(int(rng.integers(0, n)), tour, w, n, m, aux.neighbours)
         after = m[tour, np.roll(tour, -1)].sum()
         assert _is_permutation(tour, n)
         np.testing.assert_array_equal(w.pos[tour], np.arange(n))
