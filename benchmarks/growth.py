@@ -1,18 +1,23 @@
 """How the default solve scales: random Euclidean instances of N = 100 ... 3200 nodes.
 
 For each N, ``--seeds`` instances (uniform points in the unit square, distances
-as a dense matrix) are solved with the default parameters and the default stop
+as a dense matrix; with ``--asymmetric`` each ordered pair also gets a random
+offset of up to ``0.2 / sqrt(N)``, about a third of a typical tour edge, so the
+matrix is asymmetric and the solve takes its any-costs search) are solved
+with the default parameters and the default stop
 (:meth:`subtask_opt.SolverParams.default_stop`), one seed each. Printed per N:
 median wall time of ``SequencingProblem.from_matrix`` (matrix checks and the
 neighbour table, an O(N^2) argpartition), of ``solve`` and their sum, the
-median number of generations, and the tour length against the Held-Karp bound
-where it is computed (N <= ``bound_max_nodes``). Then the exponent b of a
+median number of generations, the tour length over sqrt(N) (about 0.7124 for
+optimal tours of many uniform points, the Beardwood-Halton-Hammersley constant;
+a yardstick where there is no bound) and against the Held-Karp bound where it is
+computed (N <= ``bound_max_nodes``). Then the exponent b of a
 least-squares fit time = a N^b over all N, for the solve and the build.
 
 Times are wall times after JIT warm-up; the machine may be shared and busy
 (the load average is printed), so compare within one run.
 
-    python benchmarks/growth.py [--sizes 100,200,400,800,1600,3200] [--seeds 3]
+    python benchmarks/growth.py [--sizes 100,200,400,800,1600,3200] [--seeds 3] [--asymmetric]
 """
 
 from __future__ import annotations
@@ -27,9 +32,14 @@ import numpy as np
 from subtask_opt import SequencingProblem, solve
 
 
-def _instance(n: int, seed: int) -> np.ndarray:
-    pts = np.random.default_rng(seed).random((n, 2))
-    return np.hypot(*(pts[:, None] - pts[None]).transpose(2, 0, 1))
+def _instance(n: int, seed: int, asymmetric: bool = False) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    pts = rng.random((n, 2))
+    m = np.hypot(*(pts[:, None] - pts[None]).transpose(2, 0, 1))
+    if asymmetric:
+        m += rng.random((n, n)) * (0.2 / np.sqrt(n))
+        np.fill_diagonal(m, 0.0)
+    return m
 
 
 def fit_exponent(sizes: list[int], times: list[float]) -> float:
@@ -43,17 +53,19 @@ def main() -> None:
     parser.add_argument("--sizes", default="100,200,400,800,1600,3200",
                         help="comma-separated node counts (default 100,...,3200)")
     parser.add_argument("--seeds", type=int, default=3, help="instances per size (default 3)")
+    parser.add_argument("--asymmetric", action="store_true",
+                        help="random per-pair offsets: asymmetric matrices")
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
-    solve(SequencingProblem.from_matrix(_instance(20, 0)), seed=0)  # JIT warm-up
+    solve(SequencingProblem.from_matrix(_instance(20, 0, args.asymmetric)), seed=0)  # JIT warm-up
     print(f"{'N':>6} {'build s':>8} {'solve s':>8} {'total s':>8} {'gens':>6} "
-          f"{'gap to bound':>12}")
+          f"{'len/sqrtN':>9} {'gap to bound':>12}")
     builds, solves = [], []
     for n in sizes:
-        b, s, g, gaps = [], [], [], []
+        b, s, g, gaps, lengths = [], [], [], [], []
         for seed in range(args.seeds):
-            m = _instance(n, 1000 * n + seed)
+            m = _instance(n, 1000 * n + seed, args.asymmetric)
             t0 = time.perf_counter()
             problem = SequencingProblem.from_matrix(m)
             t1 = time.perf_counter()
@@ -62,13 +74,14 @@ def main() -> None:
             b.append(t1 - t0)
             s.append(t2 - t1)
             g.append(result.generations)
+            lengths.append(result.total_time / np.sqrt(n))
             if result.lower_bound is not None:
                 gaps.append(result.total_time / result.lower_bound - 1)
         builds.append(statistics.median(b))
         solves.append(statistics.median(s))
         gap = f"{100 * statistics.median(gaps):11.2f}%" if gaps else f"{'-':>12}"
         print(f"{n:>6} {builds[-1]:8.3f} {solves[-1]:8.3f} {builds[-1] + solves[-1]:8.3f} "
-              f"{statistics.median(g):6.0f} {gap}", flush=True)
+              f"{statistics.median(g):6.0f} {statistics.median(lengths):9.4f} {gap}", flush=True)
     print(f"fitted exponent (time ~ N^b): solve b = {fit_exponent(sizes, solves):.2f}, "
           f"build b = {fit_exponent(sizes, builds):.2f}")
 

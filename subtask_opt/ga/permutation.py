@@ -12,16 +12,18 @@ chromosome type):
 * :data:`SEARCH_PAPER` - the paper's micro-GA: random restarts, no local search;
 * :data:`SEARCH_FAST` - for symmetric costs: restart individuals are iterated
   local searches of ``aux.kicks`` kicks from the best tour (local double-bridge
-  kicks of segments up to :data:`KICK_SPAN` cities, each polished and kept unless
-  the tour got longer; rejected ones are undone from a log of flips) or polished
+  kicks of segments up to :data:`KICK_SPAN` cities or a tenth of the tour, each
+  polished and kept unless the tour got longer; rejected ones are undone from a
+  log of flips) or polished
   randomised nearest-neighbour tours; children of the greedy crossover are
   polished around the edges neither parent has, then searched the same way. The
   local search makes sequential 2-opt and 3-opt moves (Or-3opt) and Or-opt moves
   on neighbour lists, with don't-look bits (a queue of active cities);
-* :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and an
-  Or-opt/2-opt local search that scans neighbour lists (segment moves without
-  reversal, whose cost does not depend on the direction of travel) with
-  don't-look bits, then one exact full-sweep check.
+* :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and a
+  local search of segment exchanges and Or-opt moves on neighbour lists (moves
+  that keep every direction of travel, so their cost change is exact) and short
+  2-opt flips (the reversed path's cost summed) with don't-look bits, finished on
+  short tours by an exact full sweep.
 
 :func:`randomize`, :func:`crossover` and :func:`improve` are the operators the
 GA dispatch registers; they branch on ``aux.search``.
@@ -40,9 +42,9 @@ FALLBACK_NEAREST = 1.0
 SEARCH_PAPER = 0
 SEARCH_FAST = 1
 SEARCH_EXACT = 2
-KICK_MODE = 30
 KICK_SPAN = 10
-"""Longest segment a double-bridge kick of the iterated local search moves."""
+"""Longest segment a double-bridge kick of the iterated local search moves on tours of
+up to 100 cities (a tenth of the tour on longer ones)."""
 
 
 class PermutationAux(NamedTuple):
@@ -161,27 +163,20 @@ def random_tour(genes, data, aux, rng, best, best_len):
 
 
 @njit(cache=True)
-def nearest_neighbour_tour(genes, data, aux, rng):
-    """Randomised nearest-neighbour tour: random first city, then one of the
-    two nearest unvisited cities at each step (a GRASP construction).
-
-    The two are looked up in the neighbour list first and by a scan of all
-    cities only when fewer than two of the listed ones are unvisited.
-    """
+def _two_nearest_unused(current, data, used, row):
+    """The nearest and second-nearest cities from ``current`` that are not ``used``
+    (-1: none), among ``row`` (its neighbour list) or, when fewer than two of those are
+    left, among all cities."""
     n = data.shape[0]
-    nb = aux.neighbours
-    k_nb = nb.shape[1]
-    used = np.zeros(n, dtype=np.bool_)
-    current = rng.integers(0, n)
-    genes[0] = current
-    used[current] = True
-    for k in range(1, n):
+    first = -1
+    second = -1
+    for scan in range(2):
         first = -1
         second = -1
         d1 = np.inf
         d2 = np.inf
-        for t in range(k_nb):
-            c = nb[current, t]
+        for t in range(row.shape[0] if scan == 0 else n):
+            c = row[t] if scan == 0 else t
             if used[c]:
                 continue
             d = data[current, c]
@@ -190,19 +185,26 @@ def nearest_neighbour_tour(genes, data, aux, rng):
                 first, d1 = c, d
             elif d < d2:
                 second, d2 = c, d
-        if second < 0:
-            first = -1
-            d1 = np.inf
-            d2 = np.inf
-            for c in range(n):
-                if used[c]:
-                    continue
-                d = data[current, c]
-                if d < d1:
-                    second, d2 = first, d1
-                    first, d1 = c, d
-                elif d < d2:
-                    second, d2 = c, d
+        if second >= 0:
+            break
+    return first, second
+
+
+@njit(cache=True)
+def nearest_neighbour_tour(genes, data, aux, rng):
+    """Randomised nearest-neighbour tour: random first city, then one of the
+    two nearest unvisited cities at each step (a GRASP construction).
+
+    The two are looked up in the neighbour list first and by a scan of all
+    cities only when fewer than two of the listed ones are unvisited.
+    """
+    n = data.shape[0]
+    used = np.zeros(n, dtype=np.bool_)
+    current = rng.integers(0, n)
+    genes[0] = current
+    used[current] = True
+    for k in range(1, n):
+        first, second = _two_nearest_unused(current, data, used, aux.neighbours[current])
         nxt = second if second >= 0 and rng.random() < 0.3 else first
         genes[k] = nxt
         used[nxt] = True
@@ -250,7 +252,7 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     take the cheaper of the two edges to its successors in the parents; if one
     successor is already in the child take the other; if both are, take an
     unvisited city, at random or the nearest (``aux.fallback``; the nearest is
-    looked up in the neighbour list first).
+    looked up as :func:`_two_nearest_unused` does).
     """
     n = len_a
     succ_a = np.empty(n, dtype=np.int64)
@@ -274,18 +276,7 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
         elif not used[nb_]:
             nxt = nb_
         elif nearest:
-            nxt = -1
-            best_d = np.inf
-            for t in range(nb.shape[1]):
-                c = nb[current, t]
-                if not used[c] and data[current, c] < best_d:
-                    best_d = data[current, c]
-                    nxt = c
-            if nxt < 0:
-                for c in range(n):
-                    if not used[c] and data[current, c] < best_d:
-                        best_d = data[current, c]
-                        nxt = c
+            nxt = _two_nearest_unused(current, data, used, nb[current])[0]
         else:
             pick = rng.integers(0, n - k)
             nxt = -1
@@ -713,6 +704,119 @@ def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     return 0.0
 
 
+@njit(cache=True)
+def _swap_blocks(genes, pos, n, start, len1, len2, scratch):
+    """Rewrite the cyclic run of ``len1`` then ``len2`` cities from position ``start`` as
+    the second block then the first, each in its own direction."""
+    for t in range(len1 + len2):
+        scratch[t] = genes[(start + t) % n]
+    for t in range(len1 + len2):
+        c = scratch[(len1 + t) % (len1 + len2)]
+        p = (start + t) % n
+        genes[p] = c
+        pos[c] = p
+
+
+@njit(cache=True)
+def _segment_exchange_move(t1, genes, w, n, data, nb):
+    """Apply the first improving segment exchange that removes the edge t1 -> t2 (the
+    pure 3-opt move that keeps every direction of travel, so it is exact for
+    asymmetric costs): t1 [t2..t3] [t4..t5] t6 becomes t1 [t4..t5] [t2..t3] t6.
+    t5 is one of t2's nearest cities and t3 one of t6's, each new edge keeping the
+    partial gain positive (LK's gain criterion). Writes the six cities it touched into
+    ``touched``; returns the gain (0.0: none)."""
+    eps = 1e-10
+    k_nb = nb.shape[1]
+    pos = w.pos
+    t2 = genes[(pos[t1] + 1) % n]
+    d12 = data[t1, t2]
+    for a in range(k_nb):
+        t5 = nb[t2, a]
+        if min(data[t2, t5], data[t5, t2]) >= d12 - eps:
+            break
+        g1 = d12 - data[t5, t2]
+        if g1 <= eps or t5 == t1:
+            continue
+        l25 = (pos[t5] - pos[t2]) % n  # t2 .. t5 along the tour, before t1
+        t6 = genes[(pos[t5] + 1) % n]
+        big = g1 + data[t5, t6]
+        for b in range(k_nb):
+            t3 = nb[t6, b]
+            if min(data[t3, t6], data[t6, t3]) >= big - eps:
+                break
+            l23 = (pos[t3] - pos[t2]) % n
+            if l23 >= l25:  # t3 must end the first block, before t5's block
+                continue
+            t4 = genes[(pos[t3] + 1) % n]
+            gain = big - data[t3, t6] + data[t3, t4] - data[t1, t4]
+            if gain > eps:
+                # blocks A = t2..t3, B = t4..t5, C = t6..t1; any two neighbouring ones
+                # swapped give the same cycle: swap the two shortest
+                la = l23 + 1
+                lb = l25 - l23
+                lc = n - la - lb
+                if lc >= la and lc >= lb:
+                    _swap_blocks(genes, pos, n, pos[t2], la, lb, w.scratch)
+                elif la >= lb:
+                    _swap_blocks(genes, pos, n, pos[t4], lb, lc, w.scratch)
+                else:
+                    _swap_blocks(genes, pos, n, pos[t6], lc, la, w.scratch)
+                touched = w.touched
+                touched[0], touched[1], touched[2] = t1, t2, t3
+                touched[3], touched[4], touched[5] = t4, t5, t6
+                return gain
+    return 0.0
+
+
+ASYMMETRIC_FLIP = 150
+"""Longest path the asymmetric 2-opt move reverses (its cost change is a sum along it, so
+the bound keeps a move's price O(1) in N; in benchmarks/growth.py --asymmetric, 50 gave
+1-2% longer tours at N = 200 to 1600 and no bound twice the time at N = 1600)."""
+
+
+@njit(cache=True)
+def _asymmetric_two_opt_move(t1, genes, w, n, data, nb):
+    """Apply the first improving 2-opt move that removes an edge at ``t1`` and reverses
+    a path of at most :data:`ASYMMETRIC_FLIP` cities (and at most half the tour, so the
+    flip never takes the complement, which would drive the tour backwards), the new
+    edge at t2 joining one of its nearest cities. Exact for asymmetric costs: the
+    reversed path's cost is summed. Writes the cities it touched into ``touched``;
+    returns the gain (0.0: none)."""
+    eps = 1e-10
+    k_nb = nb.shape[1]
+    pos = w.pos
+    longest = min(ASYMMETRIC_FLIP, n // 2)
+    for side in range(2):
+        s = 1 if side == 0 else -1
+        t2 = genes[(pos[t1] + s) % n]
+        d12 = data[t1, t2] if s == 1 else data[t2, t1]
+        for a in range(k_nb):
+            t3 = nb[t2, a]
+            if min(data[t2, t3], data[t3, t2]) >= d12 - eps:
+                break
+            steps = ((pos[t3] - pos[t2]) * s) % n  # the path t2 .. t4 has `steps` cities
+            if t3 == t1 or steps < 2 or steps > longest:
+                continue
+            t4 = genes[(pos[t3] - s) % n]
+            first = pos[t2] if s == 1 else pos[t4]  # the path in array order
+            turn = 0.0  # its cost backwards minus forwards
+            for k in range(steps - 1):
+                u = genes[(first + k) % n]
+                v = genes[(first + k + 1) % n]
+                turn += data[v, u] - data[u, v]
+            if s == 1:  # t1 t2 .. t4 t3 -> t1 t4 .. t2 t3
+                gain = d12 + data[t4, t3] - data[t1, t4] - data[t2, t3] - turn
+            else:  # t3 t4 .. t2 t1 -> t3 t2 .. t4 t1
+                gain = d12 + data[t3, t4] - data[t3, t2] - data[t4, t1] - turn
+            if gain > eps:
+                _flip(genes, w, n, first, (first + steps - 1) % n)
+                touched = w.touched
+                touched[0], touched[1], touched[2] = t1, t2, t3
+                touched[3], touched[4], touched[5] = t4, t1, t2
+                return gain
+    return 0.0
+
+
 class _Work(NamedTuple):
     """Scratch space of the local search."""
 
@@ -722,6 +826,7 @@ class _Work(NamedTuple):
     state: np.ndarray  # [queue head, queue tail, flips logged, log overflowed]
     touched: np.ndarray  # the cities the last move or kick changed
     log: np.ndarray  # (L, 2) position pairs of the flips since the log was cleared
+    scratch: np.ndarray  # n cities, for block swaps
 
 
 @njit(cache=True)
@@ -731,14 +836,14 @@ def _work(genes, n):
         pos[genes[i]] = i
     return _Work(pos, np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
                  np.zeros(4, dtype=np.int64), np.empty(8, dtype=np.int64),
-                 np.empty((1024, 2), dtype=np.int64))
+                 np.empty((1024, 2), dtype=np.int64), np.empty(n, dtype=np.int64))
 
 
 @njit(cache=True)
 def _polish(genes, n, data, aux, w, symmetric):
     """Improve from the queued cities until no queued city has an improving move;
     return the total gain. Symmetric costs: LK-style moves, then Or-opt; else
-    Or-opt without reversal only."""
+    segment exchanges, short 2-opt flips priced exactly, and Or-opt without reversal."""
     nb = aux.neighbours
     max_seg = min(aux.max_segment, n - 3)
     gain_total = 0.0
@@ -754,8 +859,12 @@ def _polish(genes, n, data, aux, w, symmetric):
         gain = 0.0
         if symmetric:
             gain = _three_opt_move(a, genes, w, n, data, nb)
-            if gain > 0.0:
-                moved = 6
+        else:
+            gain = _segment_exchange_move(a, genes, w, n, data, nb)
+            if gain <= 0.0:
+                gain = _asymmetric_two_opt_move(a, genes, w, n, data, nb)
+        if gain > 0.0:
+            moved = 6
         if moved == 0:
             gain = _or_opt_move(a, genes, w, n, data, nb, max_seg, symmetric)
             if gain > 0.0:
@@ -791,30 +900,53 @@ def local_search_around(genes, length, data, aux, active, n_active):
     return n
 
 
+EXACT_SWEEP_BELOW = 100
+"""Fewest cities for which :func:`asymmetric_local_search` skips the O(N^2)-per-pass
+full sweep of :func:`exact_local_search`."""
+
+
 @njit(cache=True)
-def asymmetric_local_search(genes, length, data, aux):
-    """Or-opt without reversal on neighbour lists (all cities active), then the exact
-    full-sweep 2-opt/Or-opt (:func:`exact_local_search`) to finish: any costs."""
+def asymmetric_neighbour_search(genes, length, data, aux):
+    """Segment exchanges, short 2-opt flips and Or-opt without reversal on neighbour
+    lists, and driving the tour backwards, until a pass from every city finds nothing:
+    any costs, O(N K^2) per pass. With full neighbour lists no segment exchange improves
+    the result."""
     n = length
-    if n >= 8:
-        w = _work(genes, n)
+    if n < 8:
+        return exact_local_search(genes, length, data, aux)
+    w = _work(genes, n)
+    while True:
         for i in range(n):
             _push(w.queue, w.queued, w.state, n, genes[i])
-        _polish(genes, n, data, aux, w, False)
-    return exact_local_search(genes, length, data, aux)
+        if _polish(genes, n, data, aux, w, False) > 0.0:
+            continue
+        ahead = tour_cost(genes, n, data, aux)
+        back = data[genes[0], genes[n - 1]]
+        for i in range(n - 1):
+            back += data[genes[i + 1], genes[i]]
+        if back >= ahead - 1e-12 * abs(ahead):
+            return n
+        genes[:n] = genes[:n][::-1].copy()
+        for i in range(n):
+            w.pos[genes[i]] = i
 
 
 @njit(cache=True)
-def _double_bridge_kick(genes, w, n, data, rng, span):
-    """A local double-bridge kick: after a random position cut three consecutive
-    segments B, C, D of 1..``span`` cities each and put them back as D C B (four
-    edges change; a chain of 2-opt flips cannot easily undo it). Writes the eight end
-    cities into ``w.touched``; returns the cost change."""
-    span = max(1, min(span, (n - 2) // 3))
-    q1 = rng.integers(0, n)
-    lb = 1 + rng.integers(0, span)
-    lc = 1 + rng.integers(0, span)
-    ld = 1 + rng.integers(0, span)
+def asymmetric_local_search(genes, length, data, aux):
+    """:func:`asymmetric_neighbour_search`, then on fewer than :data:`EXACT_SWEEP_BELOW`
+    cities the full-sweep 2-opt/Or-opt of :func:`exact_local_search`: any costs."""
+    asymmetric_neighbour_search(genes, length, data, aux)
+    if length < EXACT_SWEEP_BELOW:
+        exact_local_search(genes, length, data, aux)
+    return length
+
+
+@njit(cache=True)
+def _bridge(genes, w, n, data, q1, lb, lc, ld):
+    """The double bridge after position ``q1``: the next three segments B, C, D of
+    ``lb``, ``lc``, ``ld`` cities (together fewer than n) put back as D C B (four edges
+    change; a chain of 2-opt flips cannot easily undo it). Writes the eight end cities
+    into ``w.touched``; returns the cost change."""
     q2 = q1 + lb
     q3 = q2 + lc
     q4 = q3 + ld
@@ -842,6 +974,15 @@ def _double_bridge_kick(genes, w, n, data, rng, span):
 
 
 @njit(cache=True)
+def _double_bridge_kick(genes, w, n, data, rng, span):
+    """A local double bridge (:func:`_bridge`): three consecutive segments of 1..``span``
+    cities each after a random position. Returns the cost change."""
+    span = max(1, min(span, (n - 2) // 3))
+    return _bridge(genes, w, n, data, rng.integers(0, n), 1 + rng.integers(0, span),
+                   1 + rng.integers(0, span), 1 + rng.integers(0, span))
+
+
+@njit(cache=True)
 def iterated_local_search(genes, length, data, aux, rng, kicks):
     """``kicks`` rounds of: a local double-bridge kick, local search around it, and
     keeping the result unless it is longer (else the logged flips are undone).
@@ -850,12 +991,15 @@ def iterated_local_search(genes, length, data, aux, rng, kicks):
     if n < 8:
         return exact_local_search(genes, length, data, aux)
     w = _work(genes, n)
+    # segments of a tenth of a long tour: on pr1002 they reach a 0.2% tour in half the
+    # kicks and time of 10-city ones
+    span = max(KICK_SPAN, n // 10)
     saved = genes[:n].copy()  # a tour as short as the current one, for a log overflow
     cost = tour_cost(genes, n, data, aux)
     for _ in range(kicks):
         w.state[2] = 0
         w.state[3] = 0
-        delta = _double_bridge_kick(genes, w, n, data, rng, KICK_SPAN)
+        delta = _double_bridge_kick(genes, w, n, data, rng, span)
         for k in range(8):
             _push(w.queue, w.queued, w.state, n, w.touched[k])
         gain = _polish(genes, n, data, aux, w, True)

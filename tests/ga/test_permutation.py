@@ -87,31 +87,32 @@ def test_kicks_yield_permutations(seed, n):
         assert _is_permutation(genes, n)
 
 
+def _any_shorter(tour: np.ndarray, m: np.ndarray, candidates) -> bool:
+    """Whether one of the ``candidates`` (tours) is shorter than ``tour``."""
+    base = tour_cost(tour, len(tour), m, None)
+    return any(tour_cost(c, len(tour), m, None) < base - 1e-9 for c in candidates)
+
+
 def _two_opt_improvable(tour: np.ndarray, m: np.ndarray) -> bool:
-    n = len(tour)
-    base = tour_cost(tour, n, m, None)
-    for i in range(n - 1):
-        for j in range(i + 2, n + 1):
-            cand = tour.copy()
-            cand[i:j] = cand[i:j][::-1]
-            if tour_cost(cand, n, m, None) < base - 1e-9:
-                return True
-    return False
+    def reversals():
+        for i in range(len(tour) - 1):
+            for j in range(i + 2, len(tour) + 1):
+                cand = tour.copy()
+                cand[i:j] = cand[i:j][::-1]
+                yield cand
+    return _any_shorter(tour, m, reversals())
 
 
 def _or_opt_improvable(tour: np.ndarray, m: np.ndarray, max_seg: int) -> bool:
-    n = len(tour)
-    base = tour_cost(tour, n, m, None)
-    for seg in range(1, max_seg + 1):
-        for i in range(n - seg + 1):
-            run = tour[i:i + seg]
-            rest = np.concatenate([tour[:i], tour[i + seg:]])
-            for k in range(len(rest) + 1):
-                for piece in (run, run[::-1]):
-                    cand = np.concatenate([rest[:k], piece, rest[k:]])
-                    if tour_cost(cand, n, m, None) < base - 1e-9:
-                        return True
-    return False
+    def insertions():
+        for seg in range(1, max_seg + 1):
+            for i in range(len(tour) - seg + 1):
+                run = tour[i:i + seg]
+                rest = np.concatenate([tour[:i], tour[i + seg:]])
+                for k in range(len(rest) + 1):
+                    for piece in (run, run[::-1]):
+                        yield np.concatenate([rest[:k], piece, rest[k:]])
+    return _any_shorter(tour, m, insertions())
 
 
 @settings(max_examples=25, deadline=None)
@@ -190,16 +191,25 @@ def test_three_opt_move_gain_is_the_cost_change(seed, n, k):
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n)
     aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=k)
-    tour = rng.permutation(n).astype(np.int64)
+    _apply_moves(_three_opt_move, rng.permutation(n).astype(np.int64), m, aux.neighbours, rng)
+
+
+def _apply_moves(move, tour: np.ndarray, m: np.ndarray, nb: np.ndarray, rng) -> int:
+    """``move`` from 30 random cities of ``tour``: each keeps a permutation and its
+    position table and reports the true cost change; returns how many moved."""
+    n = len(tour)
     w = _work_on(tour)
+    moved = 0
     for _ in range(30):
         before = m[tour, np.roll(tour, -1)].sum()
-        gain = _three_opt_move(int(rng.integers(0, n)), tour, w, n, m, aux.neighbours)
+        gain = move(int(rng.integers(0, n)), tour, w, n, m, nb)
         after = m[tour, np.roll(tour, -1)].sum()
         assert _is_permutation(tour, n)
         np.testing.assert_array_equal(w.pos[tour], np.arange(n))
         assert gain >= 0.0
         assert before - after == pytest.approx(gain, abs=1e-9)
+        moved += gain > 0
+    return moved
 
 
 @settings(max_examples=40, deadline=None)
@@ -315,3 +325,49 @@ def test_make_aux_holds_the_neighbour_table_as_integers():
     aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=4)
     assert aux.neighbours.dtype == np.int64 and aux.neighbours.shape == (10, 4)
     np.testing.assert_array_equal(aux.neighbours, neighbour_table(m, 4))
+
+
+def _segment_exchange_improvable(tour: np.ndarray, m: np.ndarray) -> bool:
+    """Any three cut edges i < j < k whose blocks t[i+1..j], t[j+1..k] swapped shorten the
+    tour (every segment exchange, by enumeration)."""
+    def exchanges():
+        n = len(tour)
+        for i in range(n - 2):
+            for j in range(i + 1, n - 1):
+                for k in range(j + 1, n):
+                    yield np.concatenate([tour[:i + 1], tour[j + 1:k + 1], tour[i + 1:j + 1],
+                                          tour[k + 1:]])
+    return _any_shorter(tour, m, exchanges())
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 40), flip=st.booleans())
+def test_asymmetric_moves_report_their_cost_change(seed, n, flip):
+    # segment exchanges and short 2-opt flips on an asymmetric matrix
+    from subtask_opt.ga.permutation import _asymmetric_two_opt_move, _segment_exchange_move
+
+    move = _asymmetric_two_opt_move if flip else _segment_exchange_move
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n) + rng.random((n, n))
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=6)
+    tour = rng.permutation(n).astype(np.int64)
+    # a random tour has improving moves; the test must exercise them
+    assert _apply_moves(move, tour, m, aux.neighbours, rng) > 0
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), n=st.integers(8, 16))
+def test_asymmetric_neighbour_search_leaves_no_improving_segment_exchange(seed, n):
+    from subtask_opt.ga.permutation import asymmetric_neighbour_search
+
+    rng = np.random.default_rng(seed)
+    m = _points_matrix(seed, n) + rng.random((n, n))
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=n - 1,
+                   search=SEARCH_EXACT)
+    tour = rng.permutation(n).astype(np.int64)
+    before = tour_cost(tour, n, m, aux)
+    asymmetric_neighbour_search(tour, n, m, aux)
+    assert _is_permutation(tour, n)
+    assert tour_cost(tour, n, m, aux) <= before + 1e-12
+    assert not _segment_exchange_improvable(tour, m)
+    assert tour_cost(tour[::-1].copy(), n, m, aux) >= tour_cost(tour, n, m, aux) - 1e-9
