@@ -211,8 +211,8 @@ def relocate_pass(ext, data, configs):
 
     ``ext`` (N + 1,) is the closed tour over the targets and home (node N) with the
     targets' configurations ``configs``. Each target in turn is taken out and put
-    back between two consecutive nodes next to one of its ``data.near`` neighbours,
-    in whichever of its configurations is cheapest there (the other targets keep
+    back where it was or between two consecutive nodes next to one of its ``data.near``
+    neighbours, in whichever of its configurations is cheapest there (the other targets keep
     theirs: O(K) per place, GLNS-style); the best place that shortens the tour is
     taken. Symmetric legs (``data.near``'s contract). Returns the total gain.
     """
@@ -238,14 +238,19 @@ def relocate_pass(ext, data, configs):
         best_a = -1
         best_k = -1
         kv = off[v + 1] - off[v]
-        for t in range(near.shape[1]):
-            u = near[v, t]
+        for t in range(-1, near.shape[1]):  # -1: back between p and s, another configuration
+            u = near[v, max(t, 0)]
             j = pos[u]
             for side in range(2):
-                a = u if side == 0 else ext[(j - 1) % m]
-                b = ext[(j + 1) % m] if side == 0 else u
-                if a == v or b == v:
-                    continue  # an edge of v: putting it back there is no move
+                if t < 0:
+                    if side == 1:
+                        break
+                    a, b = p, s
+                else:
+                    a = u if side == 0 else ext[(j - 1) % m]
+                    b = ext[(j + 1) % m] if side == 0 else u
+                    if a == v or b == v:
+                        continue  # an edge of v: the place between p and s, tried first
                 ca = configs[a] if a != home else 0
                 cb = configs[b] if b != home else 0
                 base = _leg(data, a, ca, b, cb, home) + removed
@@ -287,20 +292,14 @@ def relocate_pass(ext, data, configs):
 def _symmetric_round(genes, n, data, aux, configs, ext):
     """Neighbour-list local search of the order on the decoded configurations, then
     configuration-choosing relocations, until neither improves (symmetric legs)."""
-    near_aux = tsp.PermutationAux(aux.search, aux.fallback, aux.grasp_share, aux.max_segment,
-                                  aux.kicks, data.near)
-    ext[0] = n  # home
-    ext[1:] = genes[:n]
+    near_aux = _near_aux(data, aux)
+    _to_ext(genes, n, ext)
     for _ in range(100):  # bounded; a pass that gains nothing ends it earlier
         fixed = _induced_with_home(data, configs)
         tsp.local_search(ext, n + 1, fixed, near_aux)
         if relocate_pass(ext, data, configs) <= 0.0:
             break
-    h = 0
-    while ext[h] != n:
-        h += 1
-    for k in range(n):
-        genes[k] = ext[(h + 1 + k) % (n + 1)]
+    _from_ext(ext, n, genes)
 
 
 @njit(cache=True)
@@ -344,17 +343,68 @@ def local_search(genes, length, data, aux):
 
 
 @njit(cache=True)
+def _near_aux(data, aux):
+    """``aux`` with the neighbour lists over targets + home."""
+    return tsp.PermutationAux(aux.search, aux.fallback, aux.grasp_share, aux.max_segment,
+                              aux.kicks, data.near)
+
+
+@njit(cache=True)
+def _to_ext(genes, n, ext):
+    ext[0] = n  # home
+    ext[1:] = genes[:n]
+
+
+@njit(cache=True)
+def _from_ext(ext, n, genes):
+    h = 0
+    while ext[h] != n:
+        h += 1
+    for k in range(n):
+        genes[k] = ext[(h + 1 + k) % (n + 1)]
+
+
+@njit(cache=True)
+def iterated_configured_search(genes, n, data, aux, rng, kicks):
+    """``kicks`` local double-bridge kicks of the home tour on the decoded configurations
+    of ``genes[:n]``, each polished and kept unless longer
+    (:func:`subtask_opt.ga.permutation.iterated_local_search`); symmetric legs."""
+    configs = np.empty(n, dtype=np.int64)
+    decode(genes, n, data, configs)
+    ext = np.empty(n + 1, dtype=genes.dtype)
+    _to_ext(genes, n, ext)
+    tsp.iterated_local_search(ext, n + 1, _induced_with_home(data, configs),
+                              _near_aux(data, aux), rng, kicks)
+    _from_ext(ext, n, genes)
+    return n
+
+
+@njit(cache=True)
 def randomize(genes, data, aux, rng, best, best_len):
-    """Random tours for the paper's search, kicks of the best otherwise."""
+    """Random tours for the paper's search, kicks of the best otherwise: with symmetric
+    legs (``data.near``) an iterated local search from the best tour's configurations,
+    except for a ``grasp_share`` of randomised nearest-neighbour tours."""
     if data.search == tsp.SEARCH_PAPER:
         return tsp.random_tour(genes, data.dist, aux, rng, best, best_len)
-    return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
+    n = data.dist.shape[0]
+    if (best_len == 0 or data.near.shape[0] != n + 1 or n < 8
+            or rng.random() < aux.grasp_share):
+        return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
+    genes[:n] = best[:n]
+    return iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
 
 
 @njit(cache=True)
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
-    """Greedy crossover on the cheapest target-to-target times."""
-    return tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
+    """Greedy crossover on the cheapest target-to-target times; with symmetric legs
+    (``data.near``) the child is then improved and kicked ``aux.kicks`` times
+    (:func:`iterated_configured_search`)."""
+    n = tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
+    if data.search != tsp.SEARCH_PAPER and data.near.shape[0] == n + 1 and n >= 8 \
+            and aux.kicks > 0:
+        local_search(child, n, data, aux)
+        iterated_configured_search(child, n, data, aux, rng, aux.kicks)
+    return n
 
 
 @njit(cache=True)
