@@ -50,7 +50,12 @@ class ConfiguredData(NamedTuple):
         home_in: (M,) time each configuration -> home; empty likewise.
         search: how the operators search, :data:`subtask_opt.ga.permutation.SEARCH_PAPER`
             (random restarts, no local search) or another mode (kicked restarts and
-            alternating decode + exact 2-opt/Or-opt).
+            alternating decode + local search).
+        near: (N + 1, k) int64 neighbour lists over the targets and home (node N), for
+            *symmetric* legs with a home (``legs == legs.T``, ``home_out == home_in``):
+            the local search then uses the neighbour-list moves of
+            :func:`subtask_opt.ga.permutation.local_search` and configuration-choosing
+            relocations; empty (0, 0): the exact full-sweep search, any costs.
     """
 
     dist: np.ndarray
@@ -59,6 +64,7 @@ class ConfiguredData(NamedTuple):
     home_out: np.ndarray
     home_in: np.ndarray
     search: float
+    near: np.ndarray = np.zeros((0, 0), dtype=np.int64)
 
 
 @njit(cache=True)
@@ -167,21 +173,156 @@ def _induced_with_home(data, configs):
 
 
 @njit(cache=True)
+def block_minima(legs, offsets):
+    """(N, N) cheapest leg between each pair of targets (zero diagonal) and the largest leg,
+    one pass over the (M, M) legs."""
+    n = offsets.shape[0] - 1
+    dist = np.full((n, n), np.inf)
+    top = 0.0
+    for a in range(n):
+        for r in range(offsets[a], offsets[a + 1]):
+            for b in range(n):
+                best = dist[a, b]
+                for c in range(offsets[b], offsets[b + 1]):
+                    v = legs[r, c]
+                    if v < best:
+                        best = v
+                    if v > top:
+                        top = v
+                dist[a, b] = best
+        dist[a, a] = 0.0
+    return dist, top
+
+
+@njit(cache=True, inline="always")
+def _leg(data, u, cu, v, cv, home):
+    """Time from node u in its configuration cu to node v in cv; node ``home`` is home."""
+    off = data.offsets
+    if u == home:
+        return data.home_out[off[v] + cv]
+    if v == home:
+        return data.home_in[off[u] + cu]
+    return data.legs[off[u] + cu, off[v] + cv]
+
+
+@njit(cache=True)
+def relocate_pass(ext, data, configs):
+    """One sweep of configuration-choosing relocations on the home tour ``ext``.
+
+    ``ext`` (N + 1,) is the closed tour over the targets and home (node N) with the
+    targets' configurations ``configs``. Each target in turn is taken out and put
+    back where it was or between two consecutive nodes next to one of its ``data.near``
+    neighbours, in whichever of its configurations is cheapest there (the other targets keep
+    theirs: O(K) per place, GLNS-style); the best place that shortens the tour is
+    taken. Symmetric legs (``data.near``'s contract). Returns the total gain.
+    """
+    m = ext.shape[0]
+    home = m - 1
+    off = data.offsets
+    near = data.near
+    pos = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        pos[ext[i]] = i
+    gain_total = 0.0
+    for v in range(home):
+        i = pos[v]
+        p = ext[(i - 1) % m]
+        s = ext[(i + 1) % m]
+        cp = configs[p] if p != home else 0
+        cs = configs[s] if s != home else 0
+        cv = configs[v]
+        removed = (_leg(data, p, cp, v, cv, home) + _leg(data, v, cv, s, cs, home)
+                   - _leg(data, p, cp, s, cs, home))
+        eps = 1e-12 * max(1.0, removed)
+        best = -eps
+        best_a = -1
+        best_k = -1
+        kv = off[v + 1] - off[v]
+        for t in range(-1, near.shape[1]):  # -1: back between p and s, another configuration
+            u = near[v, max(t, 0)]
+            j = pos[u]
+            for side in range(2):
+                if t < 0:
+                    if side == 1:
+                        break
+                    a, b = p, s
+                else:
+                    a = u if side == 0 else ext[(j - 1) % m]
+                    b = ext[(j + 1) % m] if side == 0 else u
+                    if a == v or b == v:
+                        continue  # an edge of v: the place between p and s, tried first
+                ca = configs[a] if a != home else 0
+                cb = configs[b] if b != home else 0
+                base = _leg(data, a, ca, b, cb, home) + removed
+                # a lower bound from the cheapest legs skips most places unread
+                bound = ((data.dist[a, v] if a != home else 0.0)
+                         + (data.dist[v, b] if b != home else 0.0))
+                if bound - base >= best:
+                    continue
+                # symmetric legs: both legs read along a row (leg v -> b = leg b -> v)
+                for k in range(kv):
+                    delta = (_leg(data, a, ca, v, k, home) + _leg(data, b, cb, v, k, home)
+                             - base)
+                    if delta < best:
+                        best = delta
+                        best_a = a
+                        best_k = k
+        if best_a < 0:
+            continue
+        # move v from position i to just after best_a, shifting the nodes between
+        ja = pos[best_a]
+        if ja > i:
+            for q in range(i, ja):
+                ext[q] = ext[q + 1]
+                pos[ext[q]] = q
+            ext[ja] = v
+            pos[v] = ja
+        else:
+            for q in range(i, ja + 1, -1):
+                ext[q] = ext[q - 1]
+                pos[ext[q]] = q
+            ext[ja + 1] = v
+            pos[v] = ja + 1
+        configs[v] = best_k
+        gain_total -= best
+    return gain_total
+
+
+@njit(cache=True)
+def _symmetric_round(genes, n, data, aux, configs, ext):
+    """Neighbour-list local search of the order on the decoded configurations, then
+    configuration-choosing relocations, until neither improves (symmetric legs)."""
+    near_aux = _near_aux(data, aux)
+    _to_ext(genes, n, ext)
+    for _ in range(100):  # bounded; a pass that gains nothing ends it earlier
+        fixed = _induced_with_home(data, configs)
+        tsp.local_search(ext, n + 1, fixed, near_aux)
+        if relocate_pass(ext, data, configs) <= 0.0:
+            break
+    _from_ext(ext, n, genes)
+
+
+@njit(cache=True)
 def local_search(genes, length, data, aux):
-    """Alternate exact decoding and 2-opt/Or-opt on the decoded configurations.
+    """Alternate exact decoding and a local search on the decoded configurations.
 
     Each round fixes the configurations the decoder chose, improves the order
     on that matrix (with home as an extra node when the tour has one) to a
     local optimum, and decodes again; the tour time never increases, and the
-    loop ends when a round gains nothing.
+    loop ends when a round gains nothing. With ``data.near`` (symmetric legs) the
+    order search is the neighbour-list one plus configuration-choosing relocations
+    (:func:`relocate_pass`); otherwise the exact full-sweep 2-opt/Or-opt.
     """
     n = length
     configs = np.empty(data.dist.shape[0], dtype=np.int64)
     cost = decode(genes, n, data, configs)
     has_home = data.home_out.shape[0] > 0
     ext = np.empty(n + 1, dtype=genes.dtype)
+    symmetric = has_home and data.near.shape[0] == n + 1
     for _ in range(100):  # bounded; a round that gains nothing ends it earlier
-        if has_home:
+        if symmetric:
+            _symmetric_round(genes, n, data, aux, configs, ext)
+        elif has_home:
             fixed = _induced_with_home(data, configs)
             ext[0] = n  # home
             ext[1:] = genes[:n]
@@ -202,17 +343,68 @@ def local_search(genes, length, data, aux):
 
 
 @njit(cache=True)
+def _near_aux(data, aux):
+    """``aux`` with the neighbour lists over targets + home."""
+    return tsp.PermutationAux(aux.search, aux.fallback, aux.grasp_share, aux.max_segment,
+                              aux.kicks, data.near)
+
+
+@njit(cache=True)
+def _to_ext(genes, n, ext):
+    ext[0] = n  # home
+    ext[1:] = genes[:n]
+
+
+@njit(cache=True)
+def _from_ext(ext, n, genes):
+    h = 0
+    while ext[h] != n:
+        h += 1
+    for k in range(n):
+        genes[k] = ext[(h + 1 + k) % (n + 1)]
+
+
+@njit(cache=True)
+def iterated_configured_search(genes, n, data, aux, rng, kicks):
+    """``kicks`` local double-bridge kicks of the home tour on the decoded configurations
+    of ``genes[:n]``, each polished and kept unless longer
+    (:func:`subtask_opt.ga.permutation.iterated_local_search`); symmetric legs."""
+    configs = np.empty(n, dtype=np.int64)
+    decode(genes, n, data, configs)
+    ext = np.empty(n + 1, dtype=genes.dtype)
+    _to_ext(genes, n, ext)
+    tsp.iterated_local_search(ext, n + 1, _induced_with_home(data, configs),
+                              _near_aux(data, aux), rng, kicks)
+    _from_ext(ext, n, genes)
+    return n
+
+
+@njit(cache=True)
 def randomize(genes, data, aux, rng, best, best_len):
-    """Random tours for the paper's search, kicks of the best otherwise."""
+    """Random tours for the paper's search, kicks of the best otherwise: with symmetric
+    legs (``data.near``) an iterated local search from the best tour's configurations,
+    except for a ``grasp_share`` of randomised nearest-neighbour tours."""
     if data.search == tsp.SEARCH_PAPER:
         return tsp.random_tour(genes, data.dist, aux, rng, best, best_len)
-    return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
+    n = data.dist.shape[0]
+    if (best_len == 0 or data.near.shape[0] != n + 1 or n < 8
+            or rng.random() < aux.grasp_share):
+        return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
+    genes[:n] = best[:n]
+    return iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
 
 
 @njit(cache=True)
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
-    """Greedy crossover on the cheapest target-to-target times."""
-    return tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
+    """Greedy crossover on the cheapest target-to-target times; with symmetric legs
+    (``data.near``) the child is then improved and kicked ``aux.kicks`` times
+    (:func:`iterated_configured_search`)."""
+    n = tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
+    if data.search != tsp.SEARCH_PAPER and data.near.shape[0] == n + 1 and n >= 8 \
+            and aux.kicks > 0:
+        local_search(child, n, data, aux)
+        iterated_configured_search(child, n, data, aux, rng, aux.kicks)
+    return n
 
 
 @njit(cache=True)

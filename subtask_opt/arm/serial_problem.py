@@ -32,12 +32,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from subtask_opt.arm import _configuration_kernels as _gc
-from subtask_opt.arm.configurations import pack_layers, penalty_for_legs
 from subtask_opt.arm.timing.joint_legs import (
     JointLimits,
     joint_limits,
     ruckig_leg_time,
     trapezoid_leg_times,
+    trapezoid_square,
 )
 from subtask_opt.base.errors import (
     InputDataError,
@@ -76,8 +76,11 @@ class SerialProblem:
         ik_seed: seed of the IK's random starts.
 
     Built on construction (read-only): ``configurations`` (per target, (K_i, n)),
-    ``offsets``, ``flat`` (M, n), ``legs`` (M, M), ``home_out``/``home_in`` (M,),
-    ``cpu`` (seconds of IK, collision and matrix work) and the collision checker.
+    ``offsets``, ``flat`` (M, n), ``legs`` (M, M, symmetric), ``home_out``/``home_in``
+    (M,, equal), ``dist`` (N, N) the cheapest leg between each pair of targets,
+    ``penalty`` (the finite time that stands for a leg found in collision: more than
+    any tour of possible legs), ``cpu`` (seconds of IK, collision and matrix work)
+    and the collision checker.
 
     Raises:
         ParameterError: bad home shape, clearance, or too many configurations.
@@ -97,12 +100,18 @@ class SerialProblem:
     offsets: np.ndarray = field(init=False, repr=False)
     flat: np.ndarray = field(init=False, repr=False)
     legs: np.ndarray = field(init=False, repr=False)
+    dist: np.ndarray = field(init=False, repr=False)
+    penalty: float = field(init=False, repr=False)
     home_out: np.ndarray = field(init=False, repr=False)
     home_in: np.ndarray = field(init=False, repr=False)
     limits: JointLimits = field(init=False, repr=False)
     checker: CollisionChecker | None = field(init=False, repr=False)
     cpu: dict[str, float] = field(init=False, repr=False)
     dropped_in_collision: int = field(init=False, repr=False)
+    # ``legs`` is a read-only view of this array; solve_serial hands it to the kernels
+    # without an M x M copy (a read-only array would be compiled for separately) and
+    # copies it before blocking a leg
+    _legs_memory: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         from subtask_opt.arm.ik import IKParams, IKSolver
@@ -177,15 +186,19 @@ class SerialProblem:
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         flat = np.ascontiguousarray(np.vstack(configs))
         t0 = time.process_time()
-        legs = trapezoid_leg_times(flat, flat, self.limits)
+        memory = trapezoid_square(flat, self.limits)
+        legs = memory.view()
         home_out = trapezoid_leg_times(home, flat, self.limits)[0]
-        home_in = trapezoid_leg_times(flat, home, self.limits)[:, 0]
+        home_in = home_out.copy()  # the trapezoid time is the same either way
+        dist, top = _gc.block_minima(memory, offsets)
+        penalty = (len(configs) + 2) * max(float(top), float(home_out.max())) + 1.0
         cpu["matrix"] += time.process_time() - t0
         for name, value in (("configurations", tuple(configs)), ("offsets", offsets),
-                            ("flat", flat), ("legs", legs), ("home_out", home_out),
+                            ("flat", flat), ("legs", legs), ("dist", dist),
+                            ("penalty", penalty), ("home_out", home_out),
                             ("home_in", home_in), ("cpu", cpu),
-                            ("dropped_in_collision", dropped)):
-            if isinstance(value, np.ndarray):
+                            ("dropped_in_collision", dropped), ("_legs_memory", memory)):
+            if isinstance(value, np.ndarray) and value is not memory:
                 value.setflags(write=False)
             object.__setattr__(self, name, value)
 
@@ -318,8 +331,7 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     n = problem.size
     cpu = dict(problem.cpu)
     cpu["search"] = 0.0
-    penalty = penalty_for_legs(np.concatenate([problem.legs.ravel(), problem.home_out,
-                                               problem.home_in]), n)
+    penalty = problem.penalty
     search = SEARCH_PAPER if params.preset == "paper" else SEARCH_FAST
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
                       mutation_rate=0.0, restart_on_convergence=True,
@@ -329,9 +341,12 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     generations = restarts = 0
     rounds = 0
     t0 = time.process_time()
-    # packed once (copies); legs found in collision are then blocked in place
-    data = pack_layers(problem.legs, off, home_out=problem.home_out, home_in=problem.home_in,
-                       penalty=penalty, search=search)
+    # the legs are the problem's until one is found in collision (then copied, blocked in
+    # place); they are symmetric, so the search uses neighbour lists over targets + home
+    data = _gc.ConfiguredData(problem.dist.copy(), off, problem._legs_memory,
+                              problem.home_out.copy(), problem.home_in.copy(), float(search),
+                              _near(problem, params.neighbours))
+    legs_copied = False
     owner = np.repeat(np.arange(n), np.diff(off))
     cpu["search"] += time.process_time() - t0
     while True:
@@ -374,6 +389,9 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
                 if a < 0 or b < 0:
                     data.home_out[max(a, b)] = data.home_in[max(a, b)] = penalty
                 else:
+                    if not legs_copied:
+                        data = data._replace(legs=data.legs.copy())
+                        legs_copied = True
                     data.legs[a, b] = data.legs[b, a] = penalty
                     ta, tb = owner[a], owner[b]
                     block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
@@ -406,6 +424,18 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
                         cpu=cpu, generations=generations, restarts=restarts, seed=int(seed))
 
 
+
+
+def _near(problem: SerialProblem, k: int) -> np.ndarray:
+    """(N + 1, k) nearest nodes of each target and home (node N) by their cheapest legs."""
+    from subtask_opt.ga.permutation import neighbour_table
+
+    n = problem.size
+    off = problem.offsets
+    closeness = np.zeros((n + 1, n + 1))
+    closeness[:n, :n] = problem.dist
+    closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(problem.home_out, off[:-1])
+    return neighbour_table(closeness, k)
 
 
 def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray) -> tuple[

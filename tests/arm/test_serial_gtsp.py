@@ -15,6 +15,7 @@ from subtask_opt.arm.timing.joint_legs import (
     joint_limits,
     ruckig_leg_time,
     trapezoid_leg_times,
+    trapezoid_square,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
 
@@ -116,6 +117,84 @@ def test_penalised_legs_are_avoided() -> None:
     assert cost == pytest.approx(_brute_force(offsets, legs, home_out, home_in), rel=1e-12)
     pos = {int(g): k for k, g in enumerate(genes)}
     assert pos[1] != pos[0] + 1
+
+
+def _with_near(data, k: int | None = None):
+    """``data`` with neighbour lists over targets + home (node N) by the cheapest legs."""
+    from subtask_opt.ga.permutation import neighbour_table
+
+    n = data.dist.shape[0]
+    closeness = np.zeros((n + 1, n + 1))
+    closeness[:n, :n] = data.dist
+    closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(data.home_out, data.offsets[:-1])
+    return data._replace(near=neighbour_table(closeness, k))
+
+
+def _home_tour_cost(ext, data, configs) -> float:
+    """Time of the closed tour ``ext`` over targets + home (node N) with fixed configurations."""
+    n = len(ext) - 1
+    flat = [-1 if u == n else data.offsets[u] + configs[u] for u in ext]
+    total = 0.0
+    for a, b in zip(flat, flat[1:] + flat[:1], strict=True):
+        total += (data.home_out[b] if a < 0 else data.home_in[a] if b < 0
+                  else data.legs[a, b])
+    return total
+
+
+@pytest.mark.parametrize(("n", "kmax", "seed"), [(5, 3, 0), (7, 3, 3), (7, 2, 4)])
+def test_symmetric_search_with_neighbour_lists_equals_brute_force(n: int, kmax: int,
+                                                                  seed: int) -> None:
+    _, offsets, legs, home_out, home_in = _random_instance(np.random.default_rng(seed), n, kmax)
+    assert np.array_equal(legs, legs.T) and np.array_equal(home_out, home_in)
+    data = _with_near(pack_layers(legs, offsets, home_out=home_out, home_in=home_in), 4)
+    genes = _run_ga(data, n, seed)
+    configs = np.zeros(n, dtype=np.int64)
+    cost = gc.decode(genes, n, data, configs)
+    assert cost == pytest.approx(_brute_force(offsets, legs, home_out, home_in), rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 8
+    _, offsets, legs, home_out, home_in = _random_instance(rng, n, 3)
+    data = _with_near(pack_layers(legs, offsets, home_out=home_out, home_in=home_in))
+    counts = np.diff(offsets)
+    configs = np.array([rng.integers(0, k) for k in counts], dtype=np.int64)
+    ext = rng.permutation(n + 1).astype(np.int64)
+    for _ in range(100):
+        before = _home_tour_cost(list(ext), data, configs)
+        gain = gc.relocate_pass(ext, data, configs)
+        assert sorted(ext) == list(range(n + 1))
+        assert before - _home_tour_cost(list(ext), data, configs) == pytest.approx(gain,
+                                                                                 abs=1e-9)
+        if gain <= 0.0:
+            break
+    # brute force: no target moved anywhere, in any of its configurations, shortens the tour
+    cost = _home_tour_cost(list(ext), data, configs)
+    for v in range(n):
+        rest = [u for u in ext if u != v]
+        for place in range(len(rest)):
+            for k in range(counts[v]):
+                c = configs.copy()
+                c[v] = k
+                tour = rest[:place + 1] + [v] + rest[place + 1:]
+                assert _home_tour_cost(tour, data, c) >= cost - 1e-9
+
+
+def test_block_minima_and_square_legs_match_numpy() -> None:
+    rng = np.random.default_rng(3)
+    flat, offsets, legs, _, _ = _random_instance(rng, 6, 4)
+    lim = joint_limits([1.0, 0.7, 1.57], [5.0, 4.25, 8.0])
+    square = trapezoid_square(flat, lim)
+    assert np.array_equal(square, trapezoid_leg_times(flat, flat, lim))
+    assert np.array_equal(square, square.T)
+    dist, top = gc.block_minima(legs, offsets)
+    expected = np.minimum.reduceat(np.minimum.reduceat(legs, offsets[:-1], axis=0),
+                                   offsets[:-1], axis=1)
+    np.fill_diagonal(expected, 0.0)
+    assert np.array_equal(dist, expected)
+    assert top == legs.max()
 
 
 def test_pack_layers_rejects_bad_offsets() -> None:

@@ -49,31 +49,64 @@ def joint_limits(velocity: Any, acceleration: Any) -> JointLimits:
     return JointLimits(v, a)
 
 
+@njit(cache=True, inline="always")
+def _leg_time(qa, r, qb, c, inv_v, inv_a):
+    tv = 0.0  # 1 / V: the path parameter's speed limit
+    ta = 0.0  # 1 / A: its acceleration limit
+    for j in range(inv_v.shape[0]):
+        d = abs(qb[c, j] - qa[r, j])
+        x = d * inv_v[j]
+        if x > tv:
+            tv = x
+        y = d * inv_a[j]
+        if y > ta:
+            ta = y
+    if tv == 0.0:
+        return 0.0
+    if ta >= tv * tv:  # full speed never reached: a triangle
+        return 2.0 * math.sqrt(ta)
+    return tv + ta / tv
+
+
 @njit(cache=True)
 def _trapezoid_matrix(qa, qb, limits):
     inv_v = 1.0 / limits.velocity
     inv_a = 1.0 / limits.acceleration
-    n = inv_v.shape[0]
     out = np.empty((qa.shape[0], qb.shape[0]))
     for r in range(qa.shape[0]):
         for c in range(qb.shape[0]):
-            tv = 0.0  # 1 / V: the path parameter's speed limit
-            ta = 0.0  # 1 / A: its acceleration limit
-            for j in range(n):
-                d = abs(qb[c, j] - qa[r, j])
-                x = d * inv_v[j]
-                if x > tv:
-                    tv = x
-                y = d * inv_a[j]
-                if y > ta:
-                    ta = y
-            if tv == 0.0:
-                out[r, c] = 0.0
-            elif ta >= tv * tv:  # full speed never reached: a triangle
-                out[r, c] = 2.0 * math.sqrt(ta)
-            else:
-                out[r, c] = tv + ta / tv
+            out[r, c] = _leg_time(qa, r, qb, c, inv_v, inv_a)
     return out
+
+
+@njit(cache=True)
+def _trapezoid_square(q, limits):
+    """The (m, m) matrix of q to itself: the upper triangle, mirrored tile by tile
+    (exactly symmetric; half the arithmetic, and the tiles keep the mirror writes local)."""
+    inv_v = 1.0 / limits.velocity
+    inv_a = 1.0 / limits.acceleration
+    m = q.shape[0]
+    out = np.empty((m, m))
+    tile = 64
+    for r0 in range(0, m, tile):
+        for c0 in range(r0, m, tile):
+            for r in range(r0, min(r0 + tile, m)):
+                for c in range(max(c0, r), min(c0 + tile, m)):
+                    t = _leg_time(q, r, q, c, inv_v, inv_a)
+                    out[r, c] = t
+                    out[c, r] = t
+    return out
+
+
+def trapezoid_square(q: Any, limits: JointLimits) -> np.ndarray:
+    """(m, m) synchronised trapezoid times between every pair of the configurations
+    ``q`` (m, n): :func:`trapezoid_leg_times` of ``q`` to itself, exactly symmetric."""
+    a = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=np.float64)))
+    n = limits.velocity.shape[0]
+    if a.ndim != 2 or a.shape[1] != n or not np.all(np.isfinite(a)):
+        raise ParameterError(f"trapezoid_square needs finite (m, {n}) configurations, "
+                             f"got shape {a.shape}")
+    return _trapezoid_square(a, limits)  # type: ignore[no-any-return]
 
 
 def trapezoid_leg_times(qa: Any, qb: Any, limits: JointLimits) -> np.ndarray:
@@ -162,4 +195,5 @@ def ruckig_leg_time(q0: Any, q1: Any, velocity: Any, acceleration: Any,
 
 
 __all__ = ["JointLimits", "StraightLeg", "joint_limits", "ruckig_leg_time", "ruckig_trajectory",
+           "trapezoid_square",
            "trapezoid_leg_times"]
