@@ -139,3 +139,21 @@ def test_batch_plot_marks_the_failed_job(tmp_path, capsys):
     assert png.stat().st_size > 5_000
     data = json.loads((tmp_path / "b.json").read_text())
     assert [j["success"] for j in data["jobs"]] == [True, False]
+
+
+def test_python_dash_m_runs_the_same_cli(tmp_path) -> None:
+    """``python -m subtask_opt.cli`` is the console script: a run writes its JSON (exit 0),
+    bad input is one line on stderr and exit 2."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "square20.json"
+    ok = subprocess.run([sys.executable, "-m", "subtask_opt.cli", "solve", "--case", "square20",
+                         "--time-model", "trapezoid", "--json", str(out)],
+                        capture_output=True, text=True, timeout=600)
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(out.read_text())["total_time"] > 0
+    bad = subprocess.run([sys.executable, "-m", "subtask_opt.cli", "solve", "--case", "nope"],
+                         capture_output=True, text=True, timeout=600)
+    assert bad.returncode == 2
+    assert len(bad.stderr.strip().splitlines()) == 1
