@@ -61,12 +61,14 @@ lint: $(VENV)/.installed-dev
 	$(BIN)/mypy subtask_opt
 
 # Kernels run as Python (NUMBA_DISABLE_JIT=1) so that they count; the slow tests then
-# take their reduced sizes (tests/conftest.py: size, examples). Everything the run
+# take their reduced sizes (tests/conftest.py: size, examples; 100 random grids and polygon
+# worlds instead of 2,000). Everything the run
 # writes stays in .coverage/ (data, caches, temporary files) and htmlcov/ (the report).
 COV := $(CURDIR)/.coverage
 coverage: $(VENV)/.installed-dev
 	rm -rf $(COV) htmlcov && mkdir -p $(COV)
-	NUMBA_DISABLE_JIT=1 MPLBACKEND=Agg PYTHONDONTWRITEBYTECODE=1 COVERAGE_FILE=$(COV)/data \
+	NUMBA_DISABLE_JIT=1 GRID_WORLDS=100 POLYGON_WORLDS=100 \
+	MPLBACKEND=Agg PYTHONDONTWRITEBYTECODE=1 COVERAGE_FILE=$(COV)/data \
 	SUBTASK_OPT_CACHE_DIR=$(COV)/kernels HYPOTHESIS_STORAGE_DIRECTORY=$(COV)/hypothesis \
 	MPLCONFIGDIR=$(COV)/matplotlib $(BIN)/python -m pytest -n 2 -p no:cacheprovider \
 		--basetemp=$(COV)/tmp --cov=subtask_opt --cov-report=term:skip-covered \

@@ -16,6 +16,7 @@ from subtask_opt.planners.grid import distance_transform as dt
 from subtask_opt.planners.grid import ga_path
 from subtask_opt.planners.grid.maps import THESIS_MAPS, thesis_case
 from subtask_opt.planners.grid.world import GridWorld
+from tests.conftest import size
 from tests.planners.grid.test_grid_oracles import path_free, path_violations
 
 
@@ -24,7 +25,8 @@ def test_success_in_19_of_20_seeds_within_5_percent_of_mdt(name):
     case = thesis_case(name)
     best = dt.plan_mdt(case.world, case.start, case.goal).length
     good = 0
-    for seed in range(20):
+    seeds = size(20, 4)  # kernels as Python (coverage): the same lines from fewer seeds
+    for seed in range(seeds):
         res = ga_path.plan(case.world, case.start, case.goal, seed=seed)
         if res.success:
             # never through an obstacle, by an independent test
@@ -32,7 +34,7 @@ def test_success_in_19_of_20_seeds_within_5_percent_of_mdt(name):
             assert tuple(res.path[0]) == case.start and tuple(res.path[-1]) == case.goal
             assert res.length >= best - 1e-9  # the MDT is the any-angle optimum
             good += res.length <= 1.05 * best
-    assert good >= 19, f"{name}: {good}/20"
+    assert good >= seeds - 1, f"{name}: {good}/{seeds}"
 
 
 def test_paper_preset_runs_the_thesis_ga():
