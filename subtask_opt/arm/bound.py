@@ -433,3 +433,172 @@ def _integral(m: np.ndarray, value: float) -> float:
     if np.all(m == np.round(m)):
         return float(math.ceil(value - max(slack, 1e-9 * max(1.0, abs(value)))))
     return float(value - slack)
+
+
+# --------------------------------------------------------------------------- candidates
+
+CANDIDATE_ITERATIONS = 50
+"""Ascent steps behind :func:`alpha_neighbour_table`'s penalties (a fixed count, so
+the table never depends on the machine's speed)."""
+
+CANDIDATE_ASCENT = BoundParams(initial_step=1.0, patience=5)
+"""A quicker ascent than the bound's: on pr1002 its 50 steps leave 2 edges of an optimal
+tour out of the 8 alpha-nearest lists (the default schedule's: 3; the 8 nearest: 5)."""
+
+ALPHA_FROM = 100
+"""Fewest cities for which :func:`candidate_table` picks alpha-nearness."""
+
+
+def candidate_table(matrix: np.ndarray, k: int) -> np.ndarray:
+    """The local search's candidate lists: alpha-nearest (:func:`alpha_neighbour_table`)
+    for a finite symmetric matrix of at least :data:`ALPHA_FROM` cities, else the
+    nearest (:func:`~subtask_opt.ga.permutation.neighbour_table`)."""
+    from subtask_opt.ga.permutation import neighbour_table
+
+    m = np.asarray(matrix, dtype=float)
+    off = ~np.eye(m.shape[0], dtype=bool)
+    if m.shape[0] < ALPHA_FROM or not np.all(np.isfinite(m[off])) or not is_symmetric(m):
+        return neighbour_table(matrix, k)
+    return alpha_neighbour_table(m, k)
+
+
+def alpha_neighbour_table(matrix: np.ndarray, k: int, *,
+                          iterations: int = CANDIDATE_ITERATIONS,
+                          params: BoundParams = CANDIDATE_ASCENT) -> np.ndarray:
+    """Each city's ``k`` alpha-nearest other cities (Helsgaun's LKH candidates).
+
+    ``alpha(i, j)`` is how much the minimum 1-tree grows when edge ``(i, j)`` is
+    forced into it, under the penalised costs ``c_ij + pi_i + pi_j`` of
+    ``iterations`` steps of the Held-Karp ascent (:func:`lower_bound`). Optimal
+    tours use edges of small alpha far more often than merely short edges, so
+    these lists miss fewer optimal edges than the ``k`` nearest. Ties go to the
+    cheaper edge, then the lower index. Cost: O(N^2) per ascent step and once
+    for the alphas. Only the lists change: a search still prices moves on
+    ``matrix``.
+    """
+    m = _checked_matrix(matrix)
+    n = m.shape[0]
+    require_int("alpha_neighbour_table", "k", k, 1)
+    require_int("alpha_neighbour_table", "iterations", iterations, 0)
+    sym = np.ascontiguousarray(np.minimum(m, m.T))
+    pi = np.zeros(n)
+    best_pi = pi.copy()
+    if iterations > 0:
+        # the ascent one step at a time, keeping the penalties of the best bound (the
+        # last ones may have overshot)
+        upper = float(_nearest_neighbour_length(sym, 0))
+        kernel = _AscentParams(iterations=int(iterations), initial_step=params.initial_step,
+                               patience=params.patience, min_step=params.min_step,
+                               momentum=params.momentum, upper=upper,
+                               tolerance=1e-12 * max(float(sym.max()), 1.0) * n)
+        direction = np.zeros(n)
+        state = np.zeros(5)
+        state[_BEST] = -np.inf
+        state[_STEP] = params.initial_step
+        while state[_FINISHED] == 0.0:
+            before = state[_BEST]
+            previous = pi.copy()
+            _held_karp_ascent(sym, kernel, pi, direction, state, 1)
+            if state[_BEST] > before:
+                best_pi = previous
+    return _alpha_table(sym, best_pi, min(int(k), n - 1))
+
+
+@njit(cache=True)
+def _alpha_table(matrix, pi, k):
+    """The ``k`` smallest alphas of each row, by (alpha, cost, index); see
+    :func:`alpha_neighbour_table`. beta(i, j), the dearest edge on the tree path
+    between i and j, fills in Prim's order from i (Helsgaun 2000, section 4.1):
+    first up the path from i to the root, then every other city from its parent."""
+    n = matrix.shape[0]
+    # minimum spanning tree of cities 1..n-1 (Prim from city 1), its order and parents
+    in_tree = np.zeros(n, dtype=np.bool_)
+    key = np.full(n, np.inf)
+    dad = np.full(n, -1, dtype=np.int64)
+    order = np.empty(n - 1, dtype=np.int64)
+    u = 1
+    for t in range(n - 1):
+        in_tree[u] = True
+        order[t] = u
+        nxt = -1
+        best = np.inf
+        for v in range(1, n):
+            if not in_tree[v]:
+                c = matrix[u, v] + (pi[u] + pi[v])
+                if c < key[v]:
+                    key[v] = c
+                    dad[v] = u
+                if key[v] < best or nxt < 0:
+                    best = key[v]
+                    nxt = v
+        u = nxt
+    # city 0 joins the 1-tree by its two cheapest edges
+    c1 = np.inf
+    c2 = np.inf
+    for v in range(1, n):
+        c = matrix[0, v] + (pi[0] + pi[v])
+        if c < c1:
+            c2 = c1
+            c1 = c
+        elif c < c2:
+            c2 = c
+    table = np.empty((n, k), dtype=np.int64)
+    alpha = np.empty(n)
+    beta = np.empty(n)
+    mark = np.full(n, -1, dtype=np.int64)
+    top_a = np.empty(k)
+    top_c = np.empty(k)
+    for i in range(n):
+        if i == 0:
+            for j in range(1, n):  # replacing the dearer of the two edges at 0
+                alpha[j] = max(matrix[0, j] + (pi[0] + pi[j]) - c2, 0.0)
+        else:
+            mark[i] = i
+            beta[i] = -np.inf
+            u = i
+            while dad[u] >= 0:
+                v = dad[u]
+                beta[v] = max(beta[u], matrix[u, v] + (pi[u] + pi[v]))
+                mark[v] = i
+                u = v
+            for t in range(n - 1):
+                j = order[t]
+                if mark[j] != i:
+                    p = dad[j]
+                    beta[j] = max(beta[p], matrix[j, p] + (pi[j] + pi[p]))
+            for j in range(1, n):
+                alpha[j] = matrix[i, j] + (pi[i] + pi[j]) - beta[j]
+            d0 = matrix[0, i] + (pi[0] + pi[i])
+            alpha[0] = 0.0 if d0 <= c2 else d0 - c2
+            alpha[i] = np.inf
+        if i == 0:
+            alpha[0] = np.inf
+        # insertion into the k best of the row
+        filled = 0
+        for j in range(n):
+            if j == i:
+                continue
+            a = alpha[j]
+            c = matrix[i, j]
+            if filled == k:
+                la = top_a[k - 1]
+                if a > la or (a == la and (c > top_c[k - 1]
+                                           or (c == top_c[k - 1] and j > table[i, k - 1]))):
+                    continue
+                pos = k - 1
+            else:
+                pos = filled
+                filled += 1
+            while pos > 0:
+                pa = top_a[pos - 1]
+                pc = top_c[pos - 1]
+                if pa < a or (pa == a and (pc < c or (pc == c and table[i, pos - 1] < j))):
+                    break
+                top_a[pos] = pa
+                top_c[pos] = pc
+                table[i, pos] = table[i, pos - 1]
+                pos -= 1
+            top_a[pos] = a
+            top_c[pos] = c
+            table[i, pos] = j
+    return table

@@ -23,7 +23,7 @@ import numpy as np
 from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
 from subtask_opt.arm._configuration_kernels import ConfiguredData
-from subtask_opt.arm.bound import lower_bound
+from subtask_opt.arm.bound import candidate_table, lower_bound
 from subtask_opt.arm.configurations import penalty_for
 from subtask_opt.arm.constraints import (
     Canonical,
@@ -519,7 +519,8 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         cm = canon.matrix
         data = np.where(np.isfinite(cm), cm, penalty_for(cm))
         dist = data
-        neighbours = neighbour_table(cm, params.neighbours)
+        # the paper's search keeps its nearest lists
+        neighbours = (neighbour_table if paper else candidate_table)(cm, params.neighbours)
         kind = Kind.PERMUTATION
         if paper:
             search = SEARCH_PAPER

@@ -11,13 +11,18 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.arm.bound import (
+    ALPHA_FROM,
     BoundParams,
+    _alpha_table,
+    alpha_neighbour_table,
     assignment_bound,
+    candidate_table,
     lower_bound,
     one_tree_bound,
 )
 from subtask_opt.arm.exact import held_karp, milp_optimum, tour_length
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.ga.permutation import neighbour_table
 from tests.conftest import examples, size
 
 
@@ -216,3 +221,70 @@ def test_time_limit_keeps_a_valid_bound_and_chunks_change_nothing():
     assert math.isfinite(quick) and quick > 0
     with pytest.raises(ParameterError, match="time_limit"):
         lower_bound(m, time_limit=0)
+
+
+def _min_one_tree(d: np.ndarray, forced: tuple[int, int] | None = None) -> float:
+    """Brute-force oracle: the cheapest 1-tree (special city 0) of the costs ``d``,
+    with the edge ``forced`` in it; Prim by plain loops over the edge list."""
+    n = d.shape[0]
+    big = float(np.abs(d).sum()) + 1.0
+    w = d.copy()
+    if forced is not None and 0 not in forced:
+        w[forced] = w[forced[::-1]] = -big  # so cheap that every minimum tree takes it
+    tree, total = {1}, 0.0
+    while len(tree) < n - 1:
+        c, v = min((w[u, v], v) for u in tree for v in range(1, n) if v not in tree)
+        tree.add(v)
+        total += c
+    if forced is not None and 0 not in forced:
+        total += big + d[forced]
+    if forced is not None and 0 in forced:
+        j = forced[0] + forced[1]
+        return total + d[0, j] + min(d[0, v] for v in range(1, n) if v != j)
+    return total + sum(sorted(d[0, 1:])[:2])
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_alpha_table_matches_forced_one_trees(seed):
+    rng = np.random.default_rng(300 + seed)
+    n = int(rng.integers(4, 11))
+    c = rng.integers(0, 20, (n, n)).astype(float)  # small integers: many ties, exact sums
+    c = np.triu(c, 1) + np.triu(c, 1).T
+    pi = rng.integers(-5, 6, n).astype(float) if seed % 2 else np.zeros(n)
+    d = c + pi[:, None] + pi[None, :]
+    base = _min_one_tree(d)
+    alpha = {(i, j): _min_one_tree(d, (i, j)) - base
+             for i in range(n) for j in range(n) if i != j}
+    k = int(rng.integers(1, n))
+    table = alpha_neighbour_table(c, k, iterations=0) if seed % 2 == 0 else \
+        _alpha_table(c, pi, k)
+    for i in range(n):
+        expected = sorted((j for j in range(n) if j != i),
+                          key=lambda j: (alpha[i, j], c[i, j], j))[:k]
+        assert table[i].tolist() == expected
+
+
+def test_candidate_table_picks_alpha_only_for_finite_symmetric_and_large():
+    rng = np.random.default_rng(7)
+    pts = rng.random((ALPHA_FROM, 2)) * 100
+    m = np.floor(_euclidean(pts) + 0.5)
+    assert np.array_equal(candidate_table(m, 6), alpha_neighbour_table(m, 6))
+    assert np.array_equal(candidate_table(m, 6), candidate_table(m.copy(), 6))  # deterministic
+    small = m[:ALPHA_FROM - 1, :ALPHA_FROM - 1]
+    assert np.array_equal(candidate_table(small, 6), neighbour_table(small, 6))
+    skew = m.copy()
+    skew[0, 1] += 1.0
+    assert np.array_equal(candidate_table(skew, 6), neighbour_table(skew, 6))
+    holed = m.copy()
+    holed[2, 3] = holed[3, 2] = np.inf
+    assert np.array_equal(candidate_table(holed, 6), neighbour_table(holed, 6))
+
+
+def test_alpha_table_bad_inputs():
+    m = np.ones((5, 5))
+    with pytest.raises(ParameterError, match="k"):
+        alpha_neighbour_table(m, 0)
+    with pytest.raises(ParameterError, match="iterations"):
+        alpha_neighbour_table(m, 2, iterations=-1)
+    with pytest.raises(InputDataError):
+        alpha_neighbour_table(np.ones((2, 2)), 1)
