@@ -164,7 +164,7 @@ def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int
     ext = rng.permutation(n + 1).astype(np.int64)
     for _ in range(100):
         before = _home_tour_cost(list(ext), data, configs)
-        gain = gc.relocate_pass(ext, data, configs)
+        gain = gc.relocate_pass(ext, data, configs, n)
         assert sorted(ext) == list(range(n + 1))
         assert before - _home_tour_cost(list(ext), data, configs) == pytest.approx(gain,
                                                                                  abs=1e-9)
