@@ -399,7 +399,41 @@ def iterated_configured_search(genes, n, data, aux, rng, kicks):
     tsp.iterated_local_search(ext, m, _fixed_matrix(data, configs), _near_aux(data, aux),
                               rng, kicks)
     _from_ext(ext, n, genes, has_home)
+    if not has_home:
+        configuration_kicks(genes, n, data, aux, rng, kicks)
     return n
+
+
+@njit(cache=True)
+def configuration_kicks(genes, n, data, aux, rng, kicks):
+    """``kicks`` rounds of: switch every target of a random run of consecutive targets to
+    another configuration, let the order adapt to those configurations (neighbour-list
+    search and relocations, :func:`_symmetric_round`), then decode and search as usual
+    (:func:`local_search`); the result is kept if it is shorter. Order moves that keep
+    the configurations rarely move many targets across a change of elbow at once; this
+    kick does. Returns the tour time."""
+    configs = np.empty(n, dtype=np.int64)
+    cost = decode(genes, n, data, configs)
+    trial = np.empty(n, dtype=genes.dtype)
+    ext = np.empty(n + 1, dtype=genes.dtype)
+    off = data.offsets
+    for _ in range(kicks):
+        trial[:] = genes[:n]
+        decode(trial, n, data, configs)
+        start = rng.integers(0, n)
+        run = 2 + rng.integers(0, max(1, n // 3))
+        for q in range(run):
+            v = trial[(start + q) % n]
+            kv = off[v + 1] - off[v]
+            if kv > 1:
+                configs[v] = (configs[v] + 1 + rng.integers(0, kv - 1)) % kv
+        _symmetric_round(trial, n, data, aux, configs, ext)
+        local_search(trial, n, data, aux)
+        new = decode(trial, n, data, configs)
+        if new < cost - 1e-12 * max(1.0, cost):
+            cost = new
+            genes[:n] = trial
+    return cost
 
 
 @njit(cache=True)
@@ -420,12 +454,14 @@ def randomize(genes, data, aux, rng, best, best_len):
 @njit(cache=True)
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     """Greedy crossover on the cheapest target-to-target times; with symmetric legs
-    (``data.near``) the child is then improved and kicked ``aux.kicks`` times
-    (:func:`iterated_configured_search`)."""
+    (``data.near``) the child is then improved and kicked ``aux.kicks`` times, at least
+    once without home (:func:`iterated_configured_search`)."""
     n = tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
-    if data.search != tsp.SEARCH_PAPER and _has_near(data, n) and n >= 8 and aux.kicks > 0:
+    # without home at least one kick: the configuration kicks are what moves the elbow split
+    kicks = aux.kicks if data.home_out.shape[0] > 0 else max(1, aux.kicks)
+    if data.search != tsp.SEARCH_PAPER and _has_near(data, n) and n >= 8 and kicks > 0:
         local_search(child, n, data, aux)
-        iterated_configured_search(child, n, data, aux, rng, aux.kicks)
+        iterated_configured_search(child, n, data, aux, rng, kicks)
     return n
 
 

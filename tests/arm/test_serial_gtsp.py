@@ -18,7 +18,7 @@ from subtask_opt.arm.timing.joint_legs import (
     trapezoid_square,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.ga.permutation import neighbour_table
+from subtask_opt.ga.permutation import make_aux, neighbour_table
 
 
 def _random_instance(rng: np.random.Generator, n: int, kmax: int, n_joints: int = 3):
@@ -50,7 +50,6 @@ def _run_ga(data, n: int, seed: int) -> np.ndarray:
     from subtask_opt.ga.config import GAConfig
     from subtask_opt.ga.kinds import Kind
     from subtask_opt.ga.loop import run_ga
-    from subtask_opt.ga.permutation import make_aux
 
     aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=data.search)
     out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
@@ -212,6 +211,28 @@ def test_closed_symmetric_search_with_neighbour_lists_equals_brute_force(n: int,
         c = np.array(choice)[perms]
         best = min(best, float(legs[c, np.roll(c, -1, axis=1)].sum(axis=1).min()))
     assert cost == pytest.approx(best, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_configuration_kicks_return_the_best_configured_time_and_never_lengthen(
+        seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 9
+    _, offsets, legs, _, _ = _random_instance(rng, n, 2)
+    data = pack_layers(legs, offsets)
+    data = data._replace(near=neighbour_table(data.dist, 4))
+    genes = rng.permutation(n).astype(np.int64)
+
+    def best_time(order) -> float:  # brute force over every configuration choice
+        choices = itertools.product(*[range(offsets[i], offsets[i + 1]) for i in order])
+        return min(float(legs[c, np.roll(c, -1)].sum()) for c in map(np.array, choices))
+
+    before = best_time(genes)
+    aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=data.search)
+    cost = gc.configuration_kicks(genes, n, data, aux, np.random.default_rng(seed), 20)
+    assert sorted(genes) == list(range(n))
+    assert cost == pytest.approx(best_time(genes), rel=1e-12)
+    assert cost <= before + 1e-9
 
 
 def test_block_minima_and_square_legs_match_numpy() -> None:
