@@ -400,7 +400,9 @@ def iterated_configured_search(genes, n, data, aux, rng, kicks):
                               rng, kicks)
     _from_ext(ext, n, genes, has_home)
     if not has_home:
-        configuration_kicks(genes, n, data, aux, rng, kicks)
+        # two per kick: on the held-out planar sets of benchmarks/heldout.py one missed
+        # 23 of 260 joint-model runs, two 6 (at about 1.5x the time)
+        configuration_kicks(genes, n, data, aux, rng, 2 * kicks)
     return n
 
 
