@@ -23,7 +23,7 @@ import numpy as np
 from subtask_opt.arm import _configuration_kernels as _gc
 from subtask_opt.arm._configuration_kernels import ConfiguredData
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.ga.permutation import SEARCH_FAST
+from subtask_opt.ga.permutation import SEARCH_FAST, neighbour_table
 
 
 def _validated_tensor(branch_times: Any) -> np.ndarray:
@@ -101,18 +101,22 @@ def penalty_for_legs(legs: np.ndarray, n_targets: int) -> float:
     return (n_targets + 2) * top + 1.0
 
 
-def pack_data(branch_times: Any) -> tuple[ConfiguredData, float]:
+def pack_data(branch_times: Any, neighbours: int = 8) -> tuple[ConfiguredData, float]:
     """The GA ``data`` (:class:`ConfiguredData`) of a 2R arm's branch times, and its penalty.
 
     Configuration ``2 i + c`` is subtask i on branch c. Impossible legs (inf)
     become the finite :func:`penalty_for`, so the GA can rank tours that use
-    them below every tour that does not.
+    them below every tour that does not. Symmetric legs (the joint and line models
+    of a closed tour) get ``neighbours`` nearest targets each (``data.near``): the
+    search then relocates targets across configurations and kicks the tour.
     """
     t = _validated_tensor(branch_times)
     n = t.shape[0]
     penalty = penalty_for(t)
     legs = t.reshape(2 * n, 2 * n)
     data = pack_layers(legs, np.arange(0, 2 * n + 1, 2), penalty=penalty)
+    if n > 1 and np.array_equal(data.legs, data.legs.T):
+        data = data._replace(near=neighbour_table(data.dist, neighbours))
     return data, penalty
 
 

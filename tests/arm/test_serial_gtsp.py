@@ -18,6 +18,7 @@ from subtask_opt.arm.timing.joint_legs import (
     trapezoid_square,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.ga.permutation import make_aux, neighbour_table
 
 
 def _random_instance(rng: np.random.Generator, n: int, kmax: int, n_joints: int = 3):
@@ -49,7 +50,6 @@ def _run_ga(data, n: int, seed: int) -> np.ndarray:
     from subtask_opt.ga.config import GAConfig
     from subtask_opt.ga.kinds import Kind
     from subtask_opt.ga.loop import run_ga
-    from subtask_opt.ga.permutation import make_aux, neighbour_table
 
     aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=data.search)
     out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
@@ -121,8 +121,6 @@ def test_penalised_legs_are_avoided() -> None:
 
 def _with_near(data, k: int | None = None):
     """``data`` with neighbour lists over targets + home (node N) by the cheapest legs."""
-    from subtask_opt.ga.permutation import neighbour_table
-
     n = data.dist.shape[0]
     closeness = np.zeros((n + 1, n + 1))
     closeness[:n, :n] = data.dist
@@ -153,25 +151,38 @@ def test_symmetric_search_with_neighbour_lists_equals_brute_force(n: int, kmax: 
     assert cost == pytest.approx(_brute_force(offsets, legs, home_out, home_in), rel=1e-12)
 
 
+def _closed_tour_cost(tour, data, configs) -> float:
+    """Time of the closed tour ``tour`` over the targets alone with fixed configurations."""
+    flat = [data.offsets[u] + configs[u] for u in tour]
+    return float(sum(data.legs[a, b] for a, b in zip(flat, flat[1:] + flat[:1], strict=True)))
+
+
+@pytest.mark.parametrize("home", [True, False])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int) -> None:
+def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int,
+                                                                      home: bool) -> None:
     rng = np.random.default_rng(seed)
     n = 8
     _, offsets, legs, home_out, home_in = _random_instance(rng, n, 3)
-    data = _with_near(pack_layers(legs, offsets, home_out=home_out, home_in=home_in))
+    if home:
+        data = _with_near(pack_layers(legs, offsets, home_out=home_out, home_in=home_in))
+        cost_of, nodes, home_node = _home_tour_cost, n + 1, n
+    else:
+        data = pack_layers(legs, offsets)
+        data = data._replace(near=neighbour_table(data.dist))
+        cost_of, nodes, home_node = _closed_tour_cost, n, -1
     counts = np.diff(offsets)
     configs = np.array([rng.integers(0, k) for k in counts], dtype=np.int64)
-    ext = rng.permutation(n + 1).astype(np.int64)
+    ext = rng.permutation(nodes).astype(np.int64)
     for _ in range(100):
-        before = _home_tour_cost(list(ext), data, configs)
-        gain = gc.relocate_pass(ext, data, configs)
-        assert sorted(ext) == list(range(n + 1))
-        assert before - _home_tour_cost(list(ext), data, configs) == pytest.approx(gain,
-                                                                                 abs=1e-9)
+        before = cost_of(list(ext), data, configs)
+        gain = gc.relocate_pass(ext, data, configs, home_node)
+        assert sorted(ext) == list(range(nodes))
+        assert before - cost_of(list(ext), data, configs) == pytest.approx(gain, abs=1e-9)
         if gain <= 0.0:
             break
     # brute force: no target moved anywhere, in any of its configurations, shortens the tour
-    cost = _home_tour_cost(list(ext), data, configs)
+    cost = cost_of(list(ext), data, configs)
     for v in range(n):
         rest = [u for u in ext if u != v]
         for place in range(len(rest)):
@@ -179,7 +190,49 @@ def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int
                 c = configs.copy()
                 c[v] = k
                 tour = rest[:place + 1] + [v] + rest[place + 1:]
-                assert _home_tour_cost(tour, data, c) >= cost - 1e-9
+                assert cost_of(tour, data, c) >= cost - 1e-9
+
+
+@pytest.mark.parametrize(("n", "kmax", "seed"), [(7, 3, 5), (9, 2, 6)])
+def test_closed_symmetric_search_with_neighbour_lists_equals_brute_force(n: int, kmax: int,
+                                                                         seed: int) -> None:
+    # symmetric legs without home (the planar arms): neighbour lists, relocations and,
+    # from 8 targets on, kicks; brute force over every order from target 0 x every choice
+    _, offsets, legs, _, _ = _random_instance(np.random.default_rng(seed), n, kmax)
+    assert np.array_equal(legs, legs.T)
+    data = pack_layers(legs, offsets)
+    data = data._replace(near=neighbour_table(data.dist, 4))
+    genes = _run_ga(data, n, seed)
+    configs = np.zeros(n, dtype=np.int64)
+    cost = gc.decode(genes, n, data, configs)
+    perms = np.array([(0, *p) for p in itertools.permutations(range(1, n))])
+    best = math.inf
+    for choice in itertools.product(*[range(offsets[i], offsets[i + 1]) for i in range(n)]):
+        c = np.array(choice)[perms]
+        best = min(best, float(legs[c, np.roll(c, -1, axis=1)].sum(axis=1).min()))
+    assert cost == pytest.approx(best, rel=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_configuration_kicks_return_the_best_configured_time_and_never_lengthen(
+        seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 9
+    _, offsets, legs, _, _ = _random_instance(rng, n, 2)
+    data = pack_layers(legs, offsets)
+    data = data._replace(near=neighbour_table(data.dist, 4))
+    genes = rng.permutation(n).astype(np.int64)
+
+    def best_time(order) -> float:  # brute force over every configuration choice
+        choices = itertools.product(*[range(offsets[i], offsets[i + 1]) for i in order])
+        return min(float(legs[c, np.roll(c, -1)].sum()) for c in map(np.array, choices))
+
+    before = best_time(genes)
+    aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=data.search)
+    cost = gc.configuration_kicks(genes, n, data, aux, np.random.default_rng(seed), 20)
+    assert sorted(genes) == list(range(n))
+    assert cost == pytest.approx(best_time(genes), rel=1e-12)
+    assert cost <= before + 1e-9
 
 
 def test_block_minima_and_square_legs_match_numpy() -> None:
