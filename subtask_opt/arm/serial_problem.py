@@ -302,7 +302,7 @@ class SerialResult:
         }
 
 
-MAX_ROUNDS = 50
+MAX_ROUNDS = 200
 """Most search rounds of the lazy leg check before :func:`solve_serial` gives up."""
 
 

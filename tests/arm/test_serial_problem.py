@@ -32,8 +32,8 @@ def arm():
 
 @pytest.fixture(scope="module")
 def solved(arm):
-    # kernels as Python (coverage): 3 targets at a 90 degree axis step cover the same lines
-    targets = make_targets(size(ROWS, ROWS[:3]), standoff=0.01, axis_step=size(45.0, 90.0))
+    # kernels as Python (coverage): a 90 degree axis step covers the same lines
+    targets = make_targets(ROWS, standoff=0.01, axis_step=size(45.0, 90.0))
     problem = SerialProblem(targets, arm, HOME, scene=PANEL)
     return problem, solve_serial(problem, seed=0)
 
