@@ -90,48 +90,48 @@ class _AscentParams(NamedTuple):
 
 
 @njit(cache=True)
-def _prim(matrix, pi, dad, order):
-    """Minimum spanning tree of cities 1..n-1 under ``c_ij + pi_i + pi_j``, Prim from
-    city 1 (the key update and the search for the next city share one pass over the row).
+def _one_tree(matrix, pi, degree):
+    """Cost of the minimum 1-tree under ``c_ij + pi_i + pi_j`` (special city 0).
 
-    Fills ``dad`` (each city's parent; -1 at cities 0 and 1) and ``order`` (the n - 1
-    cities in the order they joined); returns the tree's cost.
+    Fills ``degree`` with each city's degree in that 1-tree and returns the
+    cost (penalties included).
     """
     n = matrix.shape[0]
+    for i in range(n):
+        degree[i] = 0
+    # Prim over cities 1..n-1; the key update and the search for the next
+    # city share one pass over the row
     in_tree = np.zeros(n, dtype=np.bool_)
     key = np.full(n, np.inf)
-    dad[:] = -1
+    parent = np.full(n, -1, dtype=np.int64)
     total = 0.0
     u = 1
-    for t in range(n - 1):
+    for _ in range(n - 2):
         in_tree[u] = True
-        order[t] = u
-        if t > 0:
-            total += key[u]
+        pu = pi[u]
         nxt = -1
         best = np.inf
         for v in range(1, n):
             if not in_tree[v]:
-                c = matrix[u, v] + (pi[u] + pi[v])
+                c = matrix[u, v] + pu + pi[v]
                 if c < key[v]:
                     key[v] = c
-                    dad[v] = u
+                    parent[v] = u
                 if key[v] < best or nxt < 0:
                     best = key[v]
                     nxt = v
+        total += key[nxt]
+        degree[nxt] += 1
+        degree[parent[nxt]] += 1
         u = nxt
-    return total
-
-
-@njit(cache=True)
-def _two_cheapest_at_zero(matrix, pi):
-    """The two cheapest edges at city 0 under the penalties: (first, second, c1, c2)."""
+    # the two cheapest edges at city 0
     first = -1
     second = -1
     c1 = np.inf
     c2 = np.inf
-    for v in range(1, matrix.shape[0]):
-        c = matrix[0, v] + (pi[0] + pi[v])
+    p0 = pi[0]
+    for v in range(1, n):
+        c = matrix[0, v] + p0 + pi[v]
         if c < c1:
             c2 = c1
             second = first
@@ -140,29 +140,11 @@ def _two_cheapest_at_zero(matrix, pi):
         elif c < c2:
             c2 = c
             second = v
-    return first, second, c1, c2
-
-
-@njit(cache=True)
-def _one_tree(matrix, pi, degree):
-    """Cost of the minimum 1-tree under ``c_ij + pi_i + pi_j`` (special city 0).
-
-    Fills ``degree`` with each city's degree in that 1-tree and returns the
-    cost (penalties included).
-    """
-    n = matrix.shape[0]
-    dad = np.empty(n, dtype=np.int64)
-    total = _prim(matrix, pi, dad, np.empty(n - 1, dtype=np.int64))
-    for i in range(n):
-        degree[i] = 0
-    for v in range(2, n):
-        degree[v] += 1
-        degree[dad[v]] += 1
-    first, second, c1, c2 = _two_cheapest_at_zero(matrix, pi)
+    total += c1 + c2
     degree[0] = 2
     degree[first] += 1
     degree[second] += 1
-    return total + c1 + c2
+    return total
 
 
 @njit(cache=True)
@@ -529,12 +511,37 @@ def _alpha_table(matrix, pi, k):
     between i and j, fills in Prim's order from i (Helsgaun 2000, section 4.1):
     first up the path from i to the root, then every other city from its parent."""
     n = matrix.shape[0]
-    # minimum spanning tree of cities 1..n-1 (Prim from city 1), its order and parents;
-    # city 0 joins the 1-tree by its two cheapest edges
-    dad = np.empty(n, dtype=np.int64)
+    # minimum spanning tree of cities 1..n-1 (Prim from city 1), its order and parents
+    in_tree = np.zeros(n, dtype=np.bool_)
+    key = np.full(n, np.inf)
+    dad = np.full(n, -1, dtype=np.int64)
     order = np.empty(n - 1, dtype=np.int64)
-    _prim(matrix, pi, dad, order)
-    c2 = _two_cheapest_at_zero(matrix, pi)[3]
+    u = 1
+    for t in range(n - 1):
+        in_tree[u] = True
+        order[t] = u
+        nxt = -1
+        best = np.inf
+        for v in range(1, n):
+            if not in_tree[v]:
+                c = matrix[u, v] + (pi[u] + pi[v])
+                if c < key[v]:
+                    key[v] = c
+                    dad[v] = u
+                if key[v] < best or nxt < 0:
+                    best = key[v]
+                    nxt = v
+        u = nxt
+    # city 0 joins the 1-tree by its two cheapest edges
+    c1 = np.inf
+    c2 = np.inf
+    for v in range(1, n):
+        c = matrix[0, v] + (pi[0] + pi[v])
+        if c < c1:
+            c2 = c1
+            c1 = c
+        elif c < c2:
+            c2 = c
     table = np.empty((n, k), dtype=np.int64)
     alpha = np.empty(n)
     beta = np.empty(n)
