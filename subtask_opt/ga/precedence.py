@@ -264,6 +264,15 @@ def _better(new, old):
 
 
 @njit(cache=True)
+def _has_predecessor_from(a, pos, v, i):
+    """True if a required predecessor of ``v`` sits at tour position ``i`` or later."""
+    for q in range(a.pred_ptr[v], a.pred_ptr[v + 1]):
+        if pos[a.pred_idx[q]] >= i:
+            return True
+    return False
+
+
+@njit(cache=True)
 def _two_opt(t, data, a, pos, fw, bw):
     """One pass of feasible reversals; True if any was applied."""
     n = t.shape[0]
@@ -273,12 +282,7 @@ def _two_opt(t, data, a, pos, fw, bw):
         j = i + 1
         while j <= hi:
             v = t[j]
-            blocked = False
-            for q in range(a.pred_ptr[v], a.pred_ptr[v + 1]):
-                if pos[a.pred_idx[q]] >= i:
-                    blocked = True
-                    break
-            if blocked:
+            if _has_predecessor_from(a, pos, v, i):
                 break  # a longer reversal holds the same pair
             prev = t[i - 1]
             nxt = t[(j + 1) % n]
@@ -373,12 +377,7 @@ def _swap(t, data, a, pos):
                 jmax = p - 1
         for j in range(i + 1, jmax + 1):
             y = t[j]
-            blocked = False
-            for q in range(a.pred_ptr[y], a.pred_ptr[y + 1]):
-                if pos[a.pred_idx[q]] >= i:
-                    blocked = True
-                    break
-            if blocked:
+            if _has_predecessor_from(a, pos, y, i):
                 continue
             p = t[i - 1]
             nq = t[(j + 1) % n]
