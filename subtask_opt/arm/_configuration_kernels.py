@@ -141,7 +141,7 @@ def decode(genes, length, data, configs):
     return best_total
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def tour_cost(genes, length, data, aux):
     """Tour time with the best configurations (the ``evaluate`` operator)."""
     configs = np.empty(data.dist.shape[0], dtype=np.int64)
@@ -160,14 +160,15 @@ def induced_matrix(data, configs):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _induced_with_home(data, configs):
     """(N + 1, N + 1) leg times for fixed configurations, node N being home."""
     n = data.dist.shape[0]
     off = data.offsets
     out = np.zeros((n + 1, n + 1))
-    out[:n, :n] = induced_matrix(data, configs)
     for i in range(n):
+        for j in range(n):
+            out[i, j] = data.legs[off[i] + configs[i], off[j] + configs[j]]
         out[n, i] = data.home_out[off[i] + configs[i]]
         out[i, n] = data.home_in[off[i] + configs[i]]
     return out
@@ -290,14 +291,14 @@ def relocate_pass(ext, data, configs, home):
     return gain_total
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _has_near(data, n):
     """Whether ``data.near`` holds the neighbour lists of symmetric legs (one row per node)."""
     rows = n + 1 if data.home_out.shape[0] > 0 else n
     return data.near.shape[0] == rows
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _fixed_matrix(data, configs):
     """Leg times for fixed configurations over the tour's nodes (with home: node N)."""
     if data.home_out.shape[0] > 0:
@@ -355,29 +356,29 @@ def local_search(genes, length, data, aux):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _near_aux(data, aux):
     """``aux`` with the neighbour lists over targets + home."""
     return tsp.PermutationAux(aux.search, aux.fallback, aux.grasp_share, aux.max_segment,
                               aux.kicks, data.near)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _to_ext(genes, n, ext, has_home):
     """The tour's nodes into ``ext``: home (node N) then the targets, or the targets
     alone without home; returns their number."""
     if not has_home:
-        ext[:n] = genes[:n]
+        tsp.copy_run(ext, 0, genes, 0, n)
         return n
     ext[0] = n  # home
-    ext[1:n + 1] = genes[:n]
+    tsp.copy_run(ext, 1, genes, 0, n)
     return n + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _from_ext(ext, n, genes, has_home):
     if not has_home:
-        genes[:n] = ext[:n]
+        tsp.copy_run(genes, 0, ext, 0, n)
         return
     h = 0
     while ext[h] != n:
@@ -406,7 +407,7 @@ def iterated_configured_search(genes, n, data, aux, rng, kicks):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def configuration_kicks(genes, n, data, aux, rng, kicks):
     """``kicks`` rounds of: switch every target of a random run of consecutive targets to
     another configuration, let the order adapt to those configurations (neighbour-list
@@ -420,7 +421,7 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
     ext = np.empty(n + 1, dtype=genes.dtype)
     off = data.offsets
     for _ in range(kicks):
-        trial[:] = genes[:n]
+        tsp.copy_run(trial, 0, genes, 0, n)
         decode(trial, n, data, configs)
         start = rng.integers(0, n)
         run = 2 + rng.integers(0, max(1, n // 3))
@@ -434,11 +435,11 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
         new = decode(trial, n, data, configs)
         if new < cost - 1e-12 * max(1.0, cost):
             cost = new
-            genes[:n] = trial
+            tsp.copy_run(genes, 0, trial, 0, n)
     return cost
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def randomize(genes, data, aux, rng, best, best_len):
     """Random tours for the paper's search, kicks of the best otherwise: with symmetric
     legs (``data.near``) an iterated local search from the best tour's configurations,
@@ -449,11 +450,11 @@ def randomize(genes, data, aux, rng, best, best_len):
     if (best_len == 0 or not _has_near(data, n) or n < 8
             or rng.random() < aux.grasp_share):
         return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
-    genes[:n] = best[:n]
+    tsp.copy_run(genes, 0, best, 0, n)
     return iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     """Greedy crossover on the cheapest target-to-target times; with symmetric legs
     (``data.near``) the child is then improved and kicked ``aux.kicks`` times, at least
@@ -467,17 +468,17 @@ def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def no_mutation(genes, length, data, aux, rng, strength):
     return length
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def improve(genes, length, data, aux):
     """Alternating decoding and local search, except for the paper's search."""
-    if data.search == tsp.SEARCH_PAPER:
-        return length
-    return local_search(genes, length, data, aux)
+    if data.search != tsp.SEARCH_PAPER:
+        local_search(genes, length, data, aux)
+    return length
 
 
 register(Kind.CONFIGURED_PERMUTATION,

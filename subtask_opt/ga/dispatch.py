@@ -118,7 +118,7 @@ def improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
     return _python_operator(kind, "improve")(genes, length, data, aux)
 
 
-@overload(randomize, inline="always")
+@overload(randomize)
 def _randomize(kind, genes, data, aux, rng, best, best_len):  # type: ignore[no-untyped-def]
     op = _operator(kind, "randomize")
 
@@ -127,7 +127,7 @@ def _randomize(kind, genes, data, aux, rng, best, best_len):  # type: ignore[no-
     return impl
 
 
-@overload(evaluate, inline="always")
+@overload(evaluate)
 def _evaluate(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
     op = _operator(kind, "evaluate")
 
@@ -136,7 +136,7 @@ def _evaluate(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
     return impl
 
 
-@overload(crossover, inline="always")
+@overload(crossover)
 def _crossover(kind, genes_a, len_a, genes_b, len_b, data, aux, rng, child):  # type: ignore[no-untyped-def]
     op = _operator(kind, "crossover")
 
@@ -145,7 +145,7 @@ def _crossover(kind, genes_a, len_a, genes_b, len_b, data, aux, rng, child):  # 
     return impl
 
 
-@overload(mutate, inline="always")
+@overload(mutate)
 def _mutate(kind, genes, length, data, aux, rng, strength):  # type: ignore[no-untyped-def]
     op = _operator(kind, "mutate")
 
@@ -154,7 +154,7 @@ def _mutate(kind, genes, length, data, aux, rng, strength):  # type: ignore[no-u
     return impl
 
 
-@overload(improve, inline="always")
+@overload(improve)
 def _improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
     op = _operator(kind, "improve")
 

@@ -44,6 +44,7 @@ from subtask_opt.ga.config import (
     LoopParams,
 )
 from subtask_opt.ga.kinds import Kind, tag
+from subtask_opt.ga.permutation import copy_run
 
 # Layout of the int64 ``counters`` array (the loop's state between chunks).
 _GEN, _LAST_IMPROVE, _RESTARTS, _BEST_LEN = range(4)
@@ -262,22 +263,6 @@ def _edges_converged(pop, lengths, costs, tol, directed):
 
 
 @njit(cache=True)
-def _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng):
-    """Best so far in slot 0 (once there is one) and fresh, improved individuals elsewhere."""
-    best_len = counters[_BEST_LEN]
-    first = 0
-    if best_len > 0:
-        pop[0, :best_len] = best[:best_len]
-        lengths[0] = best_len
-        costs[0] = ops.evaluate(kind, pop[0], best_len, data, aux)
-        first = 1
-    for i in range(first, pop.shape[0]):
-        lengths[i] = ops.randomize(kind, pop[i], data, aux, rng, best, best_len)
-        lengths[i] = ops.improve(kind, pop[i], lengths[i], data, aux)
-        costs[i] = ops.evaluate(kind, pop[i], lengths[i], data, aux)
-
-
-@njit(cache=True)
 def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, params, rng,
            n_gens, stall_limit, target, hist_best, hist_mean, hist_restart):
     """Run up to ``n_gens`` generations in place; return how many ran.
@@ -311,21 +296,45 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
     kid_costs = np.empty(n_kids)
     rot_a = np.empty(max_genes, dtype=pop.dtype)
     rot_b = np.empty(max_genes, dtype=pop.dtype)
-    if counters[_BEST_LEN] == 0:  # first call: build the initial population
-        _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng)
-        i_best = np.argmin(costs)
-        counters[_BEST_LEN] = lengths[i_best]
-        best[: lengths[i_best]] = pop[i_best, : lengths[i_best]]
-        best_cost[0] = costs[i_best]
-        best_cost[1] = costs[i_best]  # kept: the best of the initial population
+    # The initial population (first call) and every restart (after a generation that
+    # converged) are built here, in one block of the loop itself: a helper kernel between
+    # the loop and the restart operators would compile their code once more (CONTRIBUTING,
+    # the cold start).
+    initial = counters[_BEST_LEN] == 0
+    reseed = initial
     ran = 0
-    for step in range(n_gens):
-        if best_cost[0] <= target or counters[_GEN] - counters[_LAST_IMPROVE] >= stall_limit:
+    step = 0
+    while True:
+        if reseed:
+            best_len = counters[_BEST_LEN]
+            first = 0
+            if best_len > 0:  # the best so far stays, in slot 0
+                copy_run(pop[0], 0, best, 0, best_len)
+                lengths[0] = best_len
+                costs[0] = ops.evaluate(kind, pop[0], best_len, data, aux)
+                first = 1
+            for i in range(first, n_pop):
+                lengths[i] = ops.randomize(kind, pop[i], data, aux, rng, best, best_len)
+                lengths[i] = ops.improve(kind, pop[i], lengths[i], data, aux)
+                costs[i] = ops.evaluate(kind, pop[i], lengths[i], data, aux)
+            if initial:
+                i_best = np.argmin(costs)
+                counters[_BEST_LEN] = lengths[i_best]
+                copy_run(best, 0, pop[i_best], 0, lengths[i_best])
+                best_cost[0] = costs[i_best]
+                best_cost[1] = costs[i_best]  # kept: the best of the initial population
+                initial = False
+            else:
+                counters[_RESTARTS] += 1
+                hist_restart[step - 1] = 1
+            reseed = False
+        if step >= n_gens or best_cost[0] <= target or (
+                counters[_GEN] - counters[_LAST_IMPROVE] >= stall_limit):
             break
         order = _stable_argsort(costs)
         for e in range(n_elite):
             src = order[e]
-            new_pop[e, : lengths[src]] = pop[src, : lengths[src]]
+            copy_run(new_pop[e], 0, pop[src], 0, lengths[src])
             new_lengths[e] = lengths[src]
             new_costs[e] = costs[src]
         strength = min(counters[_GEN] / horizon, 1.0)
@@ -352,7 +361,7 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
                 length = ops.crossover(kind, parent_a, lengths[a], parent_b, lengths[b], data,
                                        aux, rng, child)
             else:
-                child[: lengths[a]] = pop[a, : lengths[a]]
+                copy_run(child, 0, pop[a], 0, lengths[a])
                 length = lengths[a]
             if p_mut > 0.0 and rng.random() < p_mut:
                 length = ops.mutate(kind, child, length, data, aux, rng, strength)
@@ -367,7 +376,7 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
             kept = _stable_argsort(kid_costs)
             for c in range(n_pop - n_elite):
                 k = kept[c]
-                new_pop[n_elite + c, : kid_lengths[k]] = kids[k, : kid_lengths[k]]
+                copy_run(new_pop[n_elite + c], 0, kids[k], 0, kid_lengths[k])
                 new_lengths[n_elite + c] = kid_lengths[k]
                 new_costs[n_elite + c] = kid_costs[k]
         if not restart:
@@ -379,24 +388,23 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
                                              new_costs, costs)
         else:
             converged = _population_converged(new_costs, costs, conv_tol)
-        pop[:, :] = new_pop
-        lengths[:] = new_lengths
-        costs[:] = new_costs
+        for i in range(pop.shape[0]):
+            copy_run(pop[i], 0, new_pop[i], 0, pop.shape[1])
+        copy_run(lengths, 0, new_lengths, 0, lengths.shape[0])
+        copy_run(costs, 0, new_costs, 0, costs.shape[0])
         counters[_GEN] += 1
         i_best = np.argmin(costs)
         if costs[i_best] < best_cost[0]:
             best_cost[0] = costs[i_best]
             counters[_BEST_LEN] = lengths[i_best]
-            best[: lengths[i_best]] = pop[i_best, : lengths[i_best]]
+            copy_run(best, 0, pop[i_best], 0, lengths[i_best])
             counters[_LAST_IMPROVE] = counters[_GEN]
         hist_best[step] = best_cost[0]
         hist_mean[step] = np.mean(costs)
         hist_restart[step] = 0
-        if converged:
-            _reseed(kind, pop, lengths, costs, best, counters, data, aux, rng)
-            counters[_RESTARTS] += 1
-            hist_restart[step] = 1
+        reseed = converged
         ran += 1
+        step += 1
     return ran
 
 

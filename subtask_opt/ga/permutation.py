@@ -138,6 +138,26 @@ def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 
         neighbours=np.ascontiguousarray(table[:, :k], dtype=np.int64))
 
 
+# Element loops rather than slice assignment: a slice assignment compiles numba's
+# shape check and its error formatting into every kernel that reaches it, which made
+# the cold compile of the GA loop measurably slower.
+@njit(cache=True, inline="always")
+def copy_run(dst, dst_at, src, src_at, count):
+    """``dst[dst_at : dst_at + count] = src[src_at : src_at + count]`` (no overlap)."""
+    for k in range(count):
+        dst[dst_at + k] = src[src_at + k]
+
+
+@njit(cache=True, inline="always")
+def reverse_run(a, start, stop):
+    """Reverse ``a[start:stop]`` in place."""
+    i, j = start, stop - 1
+    while i < j:
+        a[i], a[j] = a[j], a[i]
+        i += 1
+        j -= 1
+
+
 @njit(cache=True)
 def tour_cost(genes, length, data, aux):
     """Cost of the closed tour genes[0] -> ... -> genes[length-1] -> genes[0]."""
@@ -388,7 +408,7 @@ def _or_opt_pass(tour, n, data, fwd, bwd, scratch, max_seg):
                     for t in range(k + 1, n - seg):
                         scratch[m] = tour[(i + seg + t) % n]
                         m += 1
-                    tour[:n] = scratch[:n]
+                    copy_run(tour, 0, scratch, 0, n)
                     _prefix_costs(tour, n, data, fwd, bwd)
                     moved = True
                     break  # the run at position i changed: go on with the next i
@@ -414,7 +434,7 @@ def exact_local_search(genes, length, data, aux):
         ahead = fwd[n - 1] + data[genes[n - 1], genes[0]]
         back = bwd[n - 1] + data[genes[0], genes[n - 1]]
         if back < ahead - 1e-12 * abs(ahead):
-            genes[1:n] = genes[1:n][::-1].copy()
+            reverse_run(genes, 1, n)
             continue
         return n
 
@@ -877,7 +897,7 @@ def _polish(genes, n, data, aux, w, symmetric):
     return gain_total
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def local_search(genes, length, data, aux):
     """LK-style moves and Or-opt to a local optimum for symmetric costs, all cities active."""
     return local_search_around(genes, length, data, aux, genes[:length].copy(), length)
@@ -926,7 +946,7 @@ def asymmetric_neighbour_search(genes, length, data, aux):
             back += data[genes[i + 1], genes[i]]
         if back >= ahead - 1e-12 * abs(ahead):
             return n
-        genes[:n] = genes[:n][::-1].copy()
+        reverse_run(genes, 0, n)
         for i in range(n):
             w.pos[genes[i]] = i
 
@@ -1006,9 +1026,9 @@ def iterated_local_search(genes, length, data, aux, rng, kicks):
         new = cost + delta - gain
         if new < cost - 1e-12 * abs(cost):
             cost = new
-            saved[:] = genes[:n]
+            copy_run(saved, 0, genes, 0, n)
         elif new > cost + 1e-12 * abs(cost) and not _undo(genes, w, n):
-            genes[:n] = saved
+            copy_run(genes, 0, saved, 0, n)
             for i in range(n):
                 w.pos[genes[i]] = i
     return n
@@ -1023,7 +1043,7 @@ def kicked_best_polished(genes, data, aux, rng, best, best_len):
     if best_len == 0 or rng.random() < aux.grasp_share:
         nearest_neighbour_tour(genes, data, aux, rng)
         return local_search(genes, n, data, aux)
-    genes[:n] = best[:n]
+    copy_run(genes, 0, best, 0, n)
     return iterated_local_search(genes, n, data, aux, rng, max(1, aux.kicks))
 
 
@@ -1055,7 +1075,7 @@ def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, ch
     cost_b = tour_cost(genes_b, n, data, aux)
     better = genes_a if cost_a <= cost_b else genes_b
     if tour_cost(child, n, data, aux) > min(cost_a, cost_b):
-        child[:n] = better[:n]
+        copy_run(child, 0, better, 0, n)
     if n >= 8 and aux.kicks > 0:
         iterated_local_search(child, n, data, aux, rng, aux.kicks)
     return n
