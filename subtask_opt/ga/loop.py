@@ -129,7 +129,7 @@ def _same_multiset(a, b):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _stable_argsort(costs):
     """Indices that sort ``costs``, ties by index: an insertion sort, which for the
     small populations of a GA is quick and compiles far faster than np.argsort."""
@@ -183,7 +183,7 @@ def _other_mate(pop, lengths, a, b, rng):
     return b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _shuffled(indices, rng):
     """``indices`` in a random order (Fisher-Yates, in place) and returned."""
     for i in range(indices.shape[0] - 1, 0, -1):
@@ -223,7 +223,7 @@ def _draw_mates(pairing, costs, order, n_elite, n_children, tournament, distinct
     return
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rotate_to(genes, length, city, out):
     """The closed tour ``genes[:length]`` written into ``out`` starting at ``city``."""
     start = 0
@@ -235,7 +235,7 @@ def _rotate_to(genes, length, city, out):
         out[i] = genes[(start + i) % length]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _edges_converged(pop, lengths, costs, tol, directed):
     """At most ``tol`` of the other strings' edges are not in the best string
     (closed tours over 0..n-1); ``directed`` compares successor entries, the
