@@ -443,28 +443,36 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
 def randomize(genes, data, aux, rng, best, best_len):
     """Random tours for the paper's search, kicks of the best otherwise: with symmetric
     legs (``data.near``) an iterated local search from the best tour's configurations,
-    except for a ``grasp_share`` of randomised nearest-neighbour tours."""
-    if data.search == tsp.SEARCH_PAPER:
-        return tsp.random_tour(genes, data.dist, aux, rng, best, best_len)
+    except for a ``grasp_share`` of randomised nearest-neighbour tours; then (except for
+    the paper's search) alternating decoding and local search (:func:`local_search`)."""
     n = data.dist.shape[0]
-    if (best_len == 0 or not _has_near(data, n) or n < 8
+    if data.search == tsp.SEARCH_PAPER:
+        tsp.random_tour(genes, data.dist, aux, rng, best, best_len)
+    elif (best_len == 0 or not _has_near(data, n) or n < 8
             or rng.random() < aux.grasp_share):
-        return tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
-    tsp.copy_run(genes, 0, best, 0, n)
-    return iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
+        tsp.kicked_best(genes, data.dist, aux, rng, best, best_len)
+        local_search(genes, n, data, aux)
+    else:
+        tsp.copy_run(genes, 0, best, 0, n)
+        iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
+        local_search(genes, n, data, aux)
+    return n
 
 
 @njit(cache=True, inline="always")
 def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
-    """Greedy crossover on the cheapest target-to-target times; with symmetric legs
-    (``data.near``) the child is then improved and kicked ``aux.kicks`` times, at least
-    once without home (:func:`iterated_configured_search`)."""
+    """Greedy crossover on the cheapest target-to-target times; then, except for the
+    paper's search, alternating decoding and local search (:func:`local_search`), with
+    symmetric legs (``data.near``) after an iterated search of ``aux.kicks`` kicks, at
+    least one without home (:func:`iterated_configured_search`)."""
     n = tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
     # without home at least one kick: the configuration kicks are what moves the elbow split
     kicks = aux.kicks if data.home_out.shape[0] > 0 else max(1, aux.kicks)
-    if data.search != tsp.SEARCH_PAPER and _has_near(data, n) and n >= 8 and kicks > 0:
+    if data.search != tsp.SEARCH_PAPER:
+        if _has_near(data, n) and n >= 8 and kicks > 0:
+            local_search(child, n, data, aux)
+            iterated_configured_search(child, n, data, aux, rng, kicks)
         local_search(child, n, data, aux)
-        iterated_configured_search(child, n, data, aux, rng, kicks)
     return n
 
 
@@ -474,12 +482,11 @@ def no_mutation(genes, length, data, aux, rng, strength):
 
 
 @njit(cache=True, inline="always")
-def improve(genes, length, data, aux):
-    """Alternating decoding and local search, except for the paper's search."""
-    if data.search != tsp.SEARCH_PAPER:
-        local_search(genes, length, data, aux)
+def no_improvement(genes, length, data, aux):
+    """Nothing: randomize and crossover end with the local search themselves, so the
+    loop's improve step compiles no search of its own (CONTRIBUTING, the cold start)."""
     return length
 
 
 register(Kind.CONFIGURED_PERMUTATION,
-         OperatorSet(randomize, tour_cost, crossover, no_mutation, improve))
+         OperatorSet(randomize, tour_cost, crossover, no_mutation, no_improvement))
