@@ -398,6 +398,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     genes = np.zeros(n, dtype=np.int64)
     aux = None
     repair = False  # True: the last round blocked legs of the current order
+    again = False  # True: search once more knowing the legs found in collision
     best: tuple[float, np.ndarray, np.ndarray] | None = None  # best collision-free answer
     cpu["search"] += time.process_time() - t0
     while True:
@@ -410,11 +411,14 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
             if aux is not None:
                 _gc.local_search(genes, n, data, aux)
             cost = float(_gc.decode(genes, n, data, choice))
-        if cost >= penalty and n > 1:  # the first round, or a repair that failed
+        if cost >= penalty and n > 1:  # the first or last search, or a repair that failed
+            if best is not None and (not again or ga_rounds >= MAX_ROUNDS):
+                break  # the collision-free answer found so far stands
             if ga_rounds >= MAX_ROUNDS:
                 raise NoPathError(f"legs in collision still in the best tour after "
                                   f"{ga_rounds} searches")
             repairs = 0
+            again = False
             aux = make_aux(neighbour_table(data.dist, params.neighbours),
                            nearest_fallback=params.preset != "paper",
                            grasp_share=params.grasp_share, max_segment=params.max_segment,
@@ -461,7 +465,8 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
             if best is None or cost < best[0]:
                 best = (cost, genes.copy(), choice.copy())
             if ga_rounds == 1 and any(checked.values()):
-                continue  # once more from scratch, knowing the legs found in collision
+                again = True
+                continue
             break
     assert best is not None  # the loop ends only after recording a collision-free answer
     _, order, index = best

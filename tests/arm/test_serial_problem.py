@@ -205,3 +205,29 @@ def test_kicks_zero_still_reaches_the_optimum(arm) -> None:
     problem = _small_problem(arm)
     result = solve_serial(problem, seed=1, kicks=0)
     assert result.planned_time == pytest.approx(_brute_force(problem), rel=1e-9)
+
+
+def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> None:
+    """With one GA search allowed, the repaired answer stands (still collision-free); with
+    no collision-free tour the limit raises."""
+    import subtask_opt.arm.serial_problem as serial_problem
+
+    monkeypatch.setattr(serial_problem, "MAX_ROUNDS", 1)
+    problem = _small_problem(arm)
+    path = solve_serial(problem, seed=0).tour_configurations()[1:-1]
+    checker = _BlockingChecker(list(zip(path[:-1], path[1:], strict=True)))
+    object.__setattr__(problem, "checker", checker)
+    result = solve_serial(problem, seed=0)
+    assert result.counts["ga_rounds"] == 1
+    assert result.counts["search_rounds"] >= 2
+    chosen = result.tour_configurations()
+    assert not any(checker.leg_in_collision(a, b, 0.01)
+                   for a, b in zip(chosen[:-1], chosen[1:], strict=True))
+
+    targets = make_targets(ROWS[:2], standoff=0.01, axis_step=180.0)
+    blocked = SerialProblem(targets, arm, HOME, check_collisions=False)
+    a, b = blocked.configurations
+    object.__setattr__(blocked, "checker", _BlockingChecker(
+        [(qa, qb) for qa in a for qb in b]))
+    with pytest.raises(NoPathError, match="still in the best tour after 1 searches"):
+        solve_serial(blocked, seed=0)
