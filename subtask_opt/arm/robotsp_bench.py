@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.base.stop import MaxGenerations, NoImprovement
+from subtask_opt.base.stop import MaxGenerations, NoImprovement, StoppingCriterion
 
 PEERS = ("robotsp", "tsp_cspace", "elkai_gtsp")
 HOME_DEG = (0.0, -20.0, 130.0, 0.0, 70.0, 0.0)
@@ -122,7 +122,9 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             "legs_in_collision": result.counts["legs_infeasible"],
             "cpu_s": cpu, "cpu_total_s": float(sum(cpu.values()))}
 
-    stop = None if stall is None else [NoImprovement(stall), MaxGenerations(50_000)]
+    stop: list[StoppingCriterion] | None = None
+    if stall is not None:
+        stop = [NoImprovement(stall), MaxGenerations(50_000)]
     ours = solve_serial(problem, seed=seed, stop=stop, kicks=kicks)
     record("ours", ours, dict(ours.cpu))
     out["methods"]["ours"]["counts"] = ours.counts
