@@ -99,6 +99,9 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
     from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
 
+    stop: list[StoppingCriterion] | None = None
+    if stall is not None:  # checked before the problem is built
+        stop = [NoImprovement(stall), MaxGenerations(50_000)]
     arm = load_serial_arm("vs060_drill", limits="robotsp")
     scene = Scene.load(data_dir / "obstacles.json")
     targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
@@ -122,9 +125,6 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             "legs_in_collision": result.counts["legs_infeasible"],
             "cpu_s": cpu, "cpu_total_s": float(sum(cpu.values()))}
 
-    stop: list[StoppingCriterion] | None = None
-    if stall is not None:
-        stop = [NoImprovement(stall), MaxGenerations(50_000)]
     ours = solve_serial(problem, seed=seed, stop=stop, kicks=kicks)
     record("ours", ours, dict(ours.cpu))
     out["methods"]["ours"]["counts"] = ours.counts
