@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.base.errors import InputDataError, ParameterError, require_int
 from subtask_opt.base.stop import MaxGenerations, NoImprovement, StoppingCriterion
 
 PEERS = ("robotsp", "tsp_cspace", "elkai_gtsp")
@@ -95,13 +95,20 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     from subtask_opt.arm.poses import make_targets
     from subtask_opt.arm.scene import Scene
     from subtask_opt.arm.serial import load_serial_arm
-    from subtask_opt.arm.serial_problem import SerialProblem, evaluate_tour, solve_serial
+    from subtask_opt.arm.serial_problem import (
+        MAX_KICKS,
+        SerialProblem,
+        evaluate_tour,
+        solve_serial,
+    )
     from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
     from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
 
     stop: list[StoppingCriterion] | None = None
-    if stall is not None:  # checked before the problem is built
+    if stall is not None:  # both checked before the problem is built
         stop = [NoImprovement(stall), MaxGenerations(50_000)]
+    if kicks is not None:
+        require_int("run_subset", "kicks", kicks, 0, MAX_KICKS)
     arm = load_serial_arm("vs060_drill", limits="robotsp")
     scene = Scene.load(data_dir / "obstacles.json")
     targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
