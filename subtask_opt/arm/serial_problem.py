@@ -14,9 +14,10 @@ Legs are checked for collisions lazily: after a search, every leg of the
 answer is swept (:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision`
 with the problem's clearance); a leg in collision is marked *infeasible* (a
 large finite penalty, so the GA avoids it) and the same order is decoded again
-and polished (the GA runs again from scratch only when that cannot avoid every
-blocked leg), until the answer uses only collision-free legs. Detours through via
-configurations are not attempted (``legs_detoured`` is always 0).
+and polished, until the answer uses only collision-free legs; then the GA runs
+once more knowing those legs and the shorter answer is kept
+(:func:`solve_serial`). Detours through via configurations are not attempted
+(``legs_detoured`` is always 0).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal synchronised profiles with the arm's jerk limits for
@@ -330,13 +331,13 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     also runs again when a repair cannot avoid the blocked legs, or after
     :data:`MAX_REPAIRS` repairs in a row.
 
-    Args:
-        kicks: kicks of the iterated local search per child and restart individual
-            (:func:`subtask_opt.ga.permutation.make_aux`); None: its default for N targets.
-
     The legs found in collision are blocked in the problem's leg matrix during the call
     (an M x M copy would cost as much as the search) and restored before it returns;
     concurrent calls on one problem wait for each other.
+
+    Args:
+        kicks: kicks of the iterated local search per child and restart individual
+            (:func:`subtask_opt.ga.permutation.make_aux`); None: its default for N targets.
 
     Raises:
         ParameterError: a bad seed, params or kicks.
