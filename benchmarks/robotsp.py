@@ -8,7 +8,8 @@ on the hole positions from a nearest-neighbour start, then a layered shortest
 path through the configurations in that order with the max-joint-difference
 metric weighted by 1/v_max, home to home), so the ratio can be measured.
 
-    python benchmarks/robotsp.py [--sizes 25,50] [--seed 0] [--json out.json] [--stand-in]
+    python benchmarks/robotsp.py [--sizes 25,50] [--seed 0] [--stall S] [--kicks K]
+                                 [--json out.json] [--stand-in]
 """
 
 from __future__ import annotations
@@ -77,6 +78,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default=None, help="comma-separated subset sizes (default all)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--stall", type=int, default=None,
+                    help="our search stops after this many generations without improvement "
+                         "(default: SolverParams.default_stop)")
+    ap.add_argument("--kicks", type=int, default=None,
+                    help="kicks per child of our search (default: make_aux's)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--data", default=str(DATA))
     ap.add_argument("--stand-in", action="store_true",
@@ -84,7 +90,8 @@ def main() -> int:
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")] if args.sizes else None
     peers = {"robotsp": robotsp_stand_in} if args.stand_in else None
-    report = run(args.data, sizes=sizes, seed=args.seed, peer_functions=peers)
+    report = run(args.data, sizes=sizes, seed=args.seed, peer_functions=peers,
+                 stall=args.stall, kicks=args.kicks)
     if args.stand_in:
         report["note"] = "robotsp column: the stand-in of benchmarks/robotsp.py"
     print(table(report))

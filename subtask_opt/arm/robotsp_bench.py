@@ -34,7 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.base.errors import InputDataError, ParameterError, require_int
+from subtask_opt.base.stop import MaxGenerations, NoImprovement, StoppingCriterion
 
 PEERS = ("robotsp", "tsp_cspace", "elkai_gtsp")
 HOME_DEG = (0.0, -20.0, 130.0, 0.0, 70.0, 0.0)
@@ -76,8 +77,13 @@ def _manipulability(arm: Any, layers: list[np.ndarray]) -> list[np.ndarray]:
 def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: int = 0,
                peers: tuple[str, ...] = PEERS, validate_dt: float = 0.01,
                peer_functions: dict[str, Callable[..., Any]] | None = None,
-               alternatives: bool | None = None) -> dict[str, Any]:
+               alternatives: bool | None = None, stall: int | None = None,
+               kicks: int | None = None) -> dict[str, Any]:
     """Every method on one subset; a JSON-ready dict of the figures.
+
+    ``stall`` and ``kicks`` set our search (:func:`~subtask_opt.arm.serial_problem.solve_serial`:
+    stop after ``stall`` generations without improvement, ``kicks`` per child); None: its
+    defaults.
 
     ``alternatives``: add the +-2 pi alternatives of joints 4 and 6 (whose ranges
     exceed 2 pi) as configurations of their own (about 3x as many); None: up to
@@ -89,10 +95,20 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     from subtask_opt.arm.poses import make_targets
     from subtask_opt.arm.scene import Scene
     from subtask_opt.arm.serial import load_serial_arm
-    from subtask_opt.arm.serial_problem import SerialProblem, evaluate_tour, solve_serial
+    from subtask_opt.arm.serial_problem import (
+        MAX_KICKS,
+        SerialProblem,
+        evaluate_tour,
+        solve_serial,
+    )
     from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
     from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
 
+    stop: list[StoppingCriterion] | None = None
+    if stall is not None:  # both checked before the problem is built
+        stop = [NoImprovement(stall), MaxGenerations(50_000)]
+    if kicks is not None:
+        require_int("run_subset", "kicks", kicks, 0, MAX_KICKS)
     arm = load_serial_arm("vs060_drill", limits="robotsp")
     scene = Scene.load(data_dir / "obstacles.json")
     targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
@@ -116,7 +132,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             "legs_in_collision": result.counts["legs_infeasible"],
             "cpu_s": cpu, "cpu_total_s": float(sum(cpu.values()))}
 
-    ours = solve_serial(problem, seed=seed)
+    ours = solve_serial(problem, seed=seed, stop=stop, kicks=kicks)
     record("ours", ours, dict(ours.cpu))
     out["methods"]["ours"]["counts"] = ours.counts
     out["methods"]["ours"]["legs_in_collision"] = evaluate_tour(
@@ -158,19 +174,22 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
 
 def run(data_dir: str | Path, *, sizes: list[int] | None = None, seed: int = 0,
         peers: tuple[str, ...] = PEERS,
-        peer_functions: dict[str, Callable[..., Any]] | None = None) -> dict[str, Any]:
-    """The benchmark over RoboTSP's subsets (``sizes``: which, default all)."""
+        peer_functions: dict[str, Callable[..., Any]] | None = None,
+        stall: int | None = None, kicks: int | None = None) -> dict[str, Any]:
+    """The benchmark over RoboTSP's subsets (``sizes``: which, default all); ``stall`` and
+    ``kicks`` as in :func:`run_subset`."""
     data_dir = Path(data_dir)
     rows, subsets, published = _load(data_dir)
     chosen = sizes or [int(k) for k in subsets]
     report: dict[str, Any] = {"robot": "vs060_drill (frames reconstructed from RoboTSP's files)",
-                              "seed": seed, "subsets": {}}
+                              "seed": seed, "stall": stall, "kicks": kicks, "subsets": {}}
     for size in chosen:
         if str(size) not in subsets:
             raise InputDataError(f"no subset of {size} holes; have {sorted(subsets)}")
         report["subsets"][str(size)] = run_subset(rows, subsets[str(size)], data_dir=data_dir,
                                                   seed=seed, peers=peers,
-                                                  peer_functions=peer_functions)
+                                                  peer_functions=peer_functions,
+                                                  stall=stall, kicks=kicks)
     report["published"] = {m: dict(zip(published["number_of_targets"], v, strict=False))
                            for m, v in published.get("execution_time_s", {}).items()}
     return report
@@ -178,7 +197,10 @@ def run(data_dir: str | Path, *, sizes: list[int] | None = None, seed: int = 0,
 
 def table(report: dict[str, Any]) -> str:
     """The report as text: one row per subset and method."""
-    lines = [f"RoboTSP drilling benchmark on {report['robot']}, seed {report['seed']}",
+    search = ", ".join(f"{k} {report[k]}" for k in ("stall", "kicks")
+                       if report.get(k) is not None) or "default search"
+    lines = [f"RoboTSP drilling benchmark on {report['robot']}, seed {report['seed']}, "
+             f"{search}",
              f"{'holes':>5} {'method':<11} {'exec s':>8} {'valid':>5} {'coll':>4} "
              f"{'IK s':>6} {'coll s':>6} {'matrix s':>8} {'search s':>8} {'conf/hole':>9} "
              f"{'vs robotsp':>10}"]

@@ -13,9 +13,11 @@ home -> targets -> home.
 Legs are checked for collisions lazily: after a search, every leg of the
 answer is swept (:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision`
 with the problem's clearance); a leg in collision is marked *infeasible* (a
-large finite penalty, so the GA avoids it) and the search runs again, until
-the answer uses only collision-free legs. Detours through via configurations
-are not attempted (``legs_detoured`` is always 0).
+large finite penalty, so the GA avoids it) and the same order is decoded again
+and polished, until the answer uses only collision-free legs; then the GA runs
+once more knowing those legs and the shorter answer is kept
+(:func:`solve_serial`). Detours through via configurations are not attempted
+(``legs_detoured`` is always 0).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal synchronised profiles with the arm's jerk limits for
@@ -24,6 +26,8 @@ the chosen legs (equal to the trapezoid times when the arm has none).
 
 from __future__ import annotations
 
+import math
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,6 +48,7 @@ from subtask_opt.base.errors import (
     NoPathError,
     ParameterError,
     require_in_range,
+    require_int,
 )
 from subtask_opt.base.stop import StoppingCriterion, as_criteria
 
@@ -109,9 +114,11 @@ class SerialProblem:
     cpu: dict[str, float] = field(init=False, repr=False)
     dropped_in_collision: int = field(init=False, repr=False)
     # ``legs`` is a read-only view of this array; solve_serial hands it to the kernels
-    # without an M x M copy (a read-only array would be compiled for separately) and
-    # copies it before blocking a leg
+    # without an M x M copy (a read-only array would be compiled for separately), blocks
+    # the legs it finds in collision in place and restores them before it returns, under
+    # ``_lock``
     _legs_memory: np.ndarray = field(init=False, repr=False)
+    _lock: threading.Lock = field(init=False, repr=False, default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
         from subtask_opt.arm.ik import IKParams, IKSolver
@@ -235,7 +242,8 @@ class SerialResult:
         total_time: sum of ``leg_times`` (s).
         collision_checked: whether configurations and the tour's legs were checked.
         counts: targets, configurations per target, legs checked, legs infeasible,
-            legs detoured, configurations dropped in collision, search rounds.
+            legs detoured, configurations dropped in collision, search rounds (of the
+            lazy leg check) and how many of them ran the GA.
         cpu: CPU seconds of IK, collision checks, matrix, search.
         generations, restarts: what the micro-GA did (summed over rounds).
         seed: the seed.
@@ -303,22 +311,39 @@ class SerialResult:
 
 
 MAX_ROUNDS = 200
-"""Most search rounds of the lazy leg check before :func:`solve_serial` gives up."""
+"""Most GA searches of the lazy leg check before :func:`solve_serial` gives up."""
+MAX_REPAIRS = 100
+"""Most repair rounds in a row before :func:`solve_serial` runs the GA again."""
 
 
 def solve_serial(problem: SerialProblem, *, seed: int = 0,
                  stop: StoppingCriterion | list[StoppingCriterion] | None = None,
-                 params: SolverParams | None = None) -> SerialResult:
+                 params: SolverParams | None = None, kicks: int | None = None) -> SerialResult:
     """Order the targets and pick one configuration each for minimum time, home to home.
 
+    The first round runs the micro-GA (``stop``; default ``params.default_stop(n)``).
+    When the answer uses a leg found in collision, that leg is blocked and the same order
+    is decoded again and polished by the local search (a repair round: the blocked leg
+    is usually replaced by another configuration of one of its targets), until a tour
+    uses no leg found in collision. The GA then runs once more from scratch, knowing
+    every leg found so far, and the shorter collision-free answer is kept (repairing
+    alone is quicker but usually ends a little longer: benchmarks/robotsp.py). The GA
+    also runs again when a repair cannot avoid the blocked legs, or after
+    :data:`MAX_REPAIRS` repairs in a row.
+
+    The legs found in collision are blocked in the problem's leg matrix during the call
+    (an M x M copy would cost as much as the search) and restored before it returns;
+    concurrent calls on one problem wait for each other.
+
+    Args:
+        kicks: kicks of the iterated local search per child and restart individual
+            (:func:`subtask_opt.ga.permutation.make_aux`); None: its default for N targets.
+
     Raises:
+        ParameterError: a bad seed, params or kicks.
         NoPathError: no tour avoids the legs found in collision.
     """
     from subtask_opt.arm.sequencing import SolverParams
-    from subtask_opt.ga.config import GAConfig
-    from subtask_opt.ga.kinds import Kind
-    from subtask_opt.ga.loop import run_ga
-    from subtask_opt.ga.permutation import SEARCH_FAST, SEARCH_PAPER, make_aux, neighbour_table
 
     if not isinstance(problem, SerialProblem):
         raise ParameterError(f"solve_serial needs a SerialProblem, got {type(problem).__name__}")
@@ -328,6 +353,31 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     params = params if params is not None else SolverParams()
     if not isinstance(params, SolverParams):
         raise ParameterError(f"solve_serial: params must be a SolverParams, got {params!r}")
+    if kicks is not None:
+        require_int("solve_serial", "kicks", kicks, 0, MAX_KICKS)
+    with problem._lock:
+        blocked: dict[tuple[int, int], float] = {}  # leg (a, b), a < b -> its time
+        try:
+            return _search(problem, int(seed), stop, params, kicks, blocked)
+        finally:
+            memory = problem._legs_memory
+            for (a, b), value in blocked.items():
+                memory[a, b] = memory[b, a] = value
+
+
+MAX_KICKS = 1000
+"""Most kicks :func:`solve_serial` accepts."""
+
+
+def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
+            kicks: int | None, blocked: dict[tuple[int, int], float]) -> SerialResult:
+    """:func:`solve_serial`'s rounds; every leg it blocks in the problem's leg memory goes
+    into ``blocked`` with its time first."""
+    from subtask_opt.ga.config import GAConfig
+    from subtask_opt.ga.kinds import Kind
+    from subtask_opt.ga.loop import run_ga
+    from subtask_opt.ga.permutation import SEARCH_FAST, SEARCH_PAPER, make_aux, neighbour_table
+
     n = problem.size
     cpu = dict(problem.cpu)
     cpu["search"] = 0.0
@@ -339,73 +389,88 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     off = problem.offsets
     checked: dict[tuple[int, int], bool] = {}  # (from, to) flat index, -1 = home -> collides
     generations = restarts = 0
-    rounds = 0
+    rounds = ga_rounds = repairs = 0
     t0 = time.process_time()
-    # the legs are the problem's until one is found in collision (then copied, blocked in
-    # place); they are symmetric, so the search uses neighbour lists over targets + home
+    # the legs are symmetric, so the search uses neighbour lists over targets + home
     data = _gc.ConfiguredData(problem.dist.copy(), off, problem._legs_memory,
                               problem.home_out.copy(), problem.home_in.copy(), float(search),
                               _near(problem, params.neighbours))
-    legs_copied = False
     owner = np.repeat(np.arange(n), np.diff(off))
+    genes = np.zeros(n, dtype=np.int64)
+    aux = None
+    repair = False  # True: the last round blocked legs of the current order
+    again = False  # True: search once more knowing the legs found in collision
+    best: tuple[float, np.ndarray, np.ndarray] | None = None  # best collision-free answer
     cpu["search"] += time.process_time() - t0
     while True:
         rounds += 1
         t0 = time.process_time()
-        if n == 1:
-            genes = np.zeros(1, dtype=np.int64)
-        else:
+        choice = np.zeros(n, dtype=np.int64)
+        cost = math.inf
+        if n == 1 or (repair and repairs < MAX_REPAIRS):
+            repairs += 1
+            if aux is not None:
+                _gc.local_search(genes, n, data, aux)
+            cost = float(_gc.decode(genes, n, data, choice))
+        if cost >= penalty and n > 1:  # the first or last search, or a repair that failed
+            if best is not None and (not again or ga_rounds >= MAX_ROUNDS):
+                break  # the collision-free answer found so far stands
+            if ga_rounds >= MAX_ROUNDS:
+                raise NoPathError(f"legs in collision still in the best tour after "
+                                  f"{ga_rounds} searches")
+            repairs = 0
+            again = False
             aux = make_aux(neighbour_table(data.dist, params.neighbours),
                            nearest_fallback=params.preset != "paper",
                            grasp_share=params.grasp_share, max_segment=params.max_segment,
-                           neighbours=params.neighbours, search=search)
+                           neighbours=params.neighbours, search=search, kicks=kicks)
             criteria = as_criteria(stop, params.default_stop(n))
+            ga_rounds += 1
             outcome = run_ga(Kind.CONFIGURED_PERMUTATION, config, data, aux, max_genes=n,
-                             seed=int(seed), criteria=criteria)
+                             seed=seed, criteria=criteria)
             genes = outcome.genes.astype(np.int64)
             generations += outcome.generations
             restarts += outcome.restarts
-        choice = np.zeros(n, dtype=np.int64)
-        cost = float(_gc.decode(genes, n, data, choice))
+            cost = float(_gc.decode(genes, n, data, choice))
         cpu["search"] += time.process_time() - t0
         tour = [-1] + [int(off[g] + choice[g]) for g in genes] + [-1]
+        if cost >= penalty and best is not None:
+            break  # a later search found nothing better than the collision-free answer
         if cost >= penalty:
             raise NoPathError(
                 f"no tour avoids the legs in collision ({sum(checked.values())} legs of "
                 f"{len(checked)} checked collide); try a larger axis step sampling, another "
                 "home or fewer obstacles")
-        if problem.checker is None:
-            break
+        repair = False
         t0 = time.process_time()
-        new_blocked = False
         for a, b in zip(tour[:-1], tour[1:], strict=True):
+            if problem.checker is None:
+                break
             key = (min(a, b), max(a, b))
             if key not in checked:
                 qa = problem.home if a < 0 else problem.flat[a]
                 qb = problem.home if b < 0 else problem.flat[b]
                 checked[key] = problem.checker.leg_in_collision(qa, qb, problem.clearance)
             if checked[key]:
-                new_blocked = True
+                repair = True
                 if a < 0 or b < 0:
                     data.home_out[max(a, b)] = data.home_in[max(a, b)] = penalty
                 else:
-                    if not legs_copied:
-                        data = data._replace(legs=data.legs.copy())
-                        legs_copied = True
+                    blocked.setdefault(key, float(data.legs[key]))
                     data.legs[a, b] = data.legs[b, a] = penalty
                     ta, tb = owner[a], owner[b]
                     block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
-                    data.dist[ta, tb] = block.min()
-                    data.dist[tb, ta] = data.legs[off[tb]:off[tb + 1],
-                                                  off[ta]:off[ta + 1]].min()
+                    data.dist[ta, tb] = data.dist[tb, ta] = block.min()
         cpu["collision"] += time.process_time() - t0
-        if not new_blocked:
+        if not repair:
+            if best is None or cost < best[0]:
+                best = (cost, genes.copy(), choice.copy())
+            if ga_rounds == 1 and any(checked.values()):
+                again = True
+                continue
             break
-        if rounds >= MAX_ROUNDS:
-            raise NoPathError(f"legs in collision still in the best tour after {rounds} "
-                              "search rounds")
-    order = genes.copy()
-    index = choice
+    assert best is not None  # the loop ends only after recording a collision-free answer
+    _, order, index = best
     chosen, path, planned, executed = _tour_legs(problem, order, index)
     counts = {
         "targets": n,
@@ -416,14 +481,13 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
         "legs_infeasible": int(sum(checked.values())),
         "legs_detoured": 0,
         "search_rounds": rounds,
+        "ga_rounds": ga_rounds,
     }
     return SerialResult(order=order, configuration_index=index, configurations=chosen,
                         home=np.array(problem.home), leg_times=executed,
                         planned_leg_times=planned, total_time=float(executed.sum()),
                         collision_checked=problem.checker is not None, counts=counts,
-                        cpu=cpu, generations=generations, restarts=restarts, seed=int(seed))
-
-
+                        cpu=cpu, generations=generations, restarts=restarts, seed=seed)
 
 
 def _near(problem: SerialProblem, k: int) -> np.ndarray:

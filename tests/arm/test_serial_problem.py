@@ -14,7 +14,7 @@ from subtask_opt.arm.scene import Scene
 from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.arm.serial_problem import SerialProblem, solve_serial
 from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
-from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
 from tests.conftest import size
 
 HOME = np.radians([0, -90, 90, -90, -90, 0])
@@ -64,14 +64,7 @@ def test_answer_is_optimal_over_orders_and_configurations_of_checked_legs(solved
     targets = make_targets(ROWS[:4], standoff=0.01, axis_step=90.0)
     small = SerialProblem(targets, arm, HOME, check_collisions=False)
     result = solve_serial(small, seed=3)
-    off = small.offsets
-    best = math.inf
-    for perm in itertools.permutations(range(4)):
-        for choice in itertools.product(*[range(off[i], off[i + 1]) for i in perm]):
-            c = np.array(choice)
-            best = min(best, small.home_out[c[0]] + small.legs[c[:-1], c[1:]].sum()
-                       + small.home_in[c[-1]])
-    assert result.planned_time == pytest.approx(best, rel=1e-9)
+    assert result.planned_time == pytest.approx(_brute_force(small), rel=1e-9)
 
 
 def test_same_seed_same_answer(solved) -> None:
@@ -110,3 +103,131 @@ def test_bad_inputs_name_the_value(arm) -> None:
         SerialProblem(targets, arm, HOME, scene=Scene.from_dict(
             {"boxes": [{"name": "block", "center": [0.0, 0.0, 0.4],
                         "half_extents": [0.3, 0.3, 0.3]}]}))
+
+
+class _BlockingChecker:
+    """Stands in for the collision checker: a leg collides iff its two end configurations
+    are in ``legs`` (pairs of joint vectors, either way round); configurations never do."""
+
+    def __init__(self, legs) -> None:
+        self.legs = [(np.asarray(a), np.asarray(b)) for a, b in legs]
+        self.calls = 0
+
+    def leg_in_collision(self, q0, q1, clearance) -> bool:
+        self.calls += 1
+        return any((np.array_equal(q0, a) and np.array_equal(q1, b))
+                   or (np.array_equal(q0, b) and np.array_equal(q1, a)) for a, b in self.legs)
+
+
+def _small_problem(arm, rows=4):
+    targets = make_targets(ROWS[:rows], standoff=0.01, axis_step=90.0)
+    return SerialProblem(targets, arm, HOME, check_collisions=False)
+
+
+def _brute_force(problem, blocked=()):
+    """Shortest home-to-home tour (trapezoid times) over every order and configuration
+    without the ``blocked`` legs (pairs of flat configuration indices, either way round):
+    for each order, the sum of the legs of every configuration tuple at once."""
+    legs = problem.legs.copy()
+    for a, b in blocked:
+        legs[a, b] = legs[b, a] = math.inf
+    off = problem.offsets
+    n = problem.size
+    best = math.inf
+    for perm in itertools.permutations(range(n)):
+        idx = [np.arange(off[i], off[i + 1]) for i in perm]
+        total = problem.home_out[idx[0]].reshape((-1,) + (1,) * (n - 1))
+        for k in range(1, n):
+            shape = [1] * n
+            shape[k - 1], shape[k] = idx[k - 1].size, idx[k].size
+            total = total + legs[np.ix_(idx[k - 1], idx[k])].reshape(shape)
+        last = [1] * n
+        last[-1] = idx[-1].size
+        total = total + problem.home_in[idx[-1]].reshape(last)
+        best = min(best, float(total.min()))
+    return best
+
+
+def test_blocked_legs_are_avoided_and_the_answer_is_optimal_without_them(arm) -> None:
+    """Every target-to-target leg of the unchecked answer collides: the search blocks them
+    all in its first round, then searches again knowing them; brute force over the legs
+    left is the oracle."""
+    problem = _small_problem(arm)
+    legs_before = problem.legs.copy()
+    free = solve_serial(problem, seed=0)
+    path = free.tour_configurations()[1:-1]
+    blocked = list(zip(path[:-1], path[1:], strict=True))
+    checker = _BlockingChecker(blocked)
+    object.__setattr__(problem, "checker", checker)
+    result = solve_serial(problem, seed=0)
+    chosen = result.tour_configurations()[1:-1]
+    assert not any(checker.leg_in_collision(a, b, 0.01)
+                   for a, b in zip(chosen[:-1], chosen[1:], strict=True))
+    assert result.counts["legs_infeasible"] == len(blocked)
+    assert result.counts["search_rounds"] >= 2
+    assert result.counts["ga_rounds"] == 2
+
+    flat = problem.flat
+    pairs = [(a, b) for a in range(len(flat)) for b in range(a + 1, len(flat))
+             if checker.leg_in_collision(flat[a], flat[b], 0.01)]
+    assert len(pairs) == len(blocked)
+    assert result.planned_time == pytest.approx(_brute_force(problem, pairs), rel=1e-9)
+    assert result.planned_time > free.planned_time
+    # the blocked legs were restored
+    np.testing.assert_array_equal(problem.legs, legs_before)
+    again = solve_serial(problem, seed=0)
+    np.testing.assert_array_equal(again.order, result.order)
+    np.testing.assert_array_equal(again.configuration_index, result.configuration_index)
+
+
+def test_no_collision_free_tour_raises_and_restores_the_legs(arm) -> None:
+    targets = make_targets(ROWS[:2], standoff=0.01, axis_step=180.0)
+    problem = SerialProblem(targets, arm, HOME, check_collisions=False)
+    legs_before = problem.legs.copy()
+    # every leg between the two targets collides: no tour is left
+    a, b = problem.configurations
+    object.__setattr__(problem, "checker", _BlockingChecker(
+        [(qa, qb) for qa in a for qb in b]))
+    with pytest.raises(NoPathError, match="no tour avoids the legs in collision"):
+        solve_serial(problem, seed=0)
+    np.testing.assert_array_equal(problem.legs, legs_before)
+
+
+@pytest.mark.parametrize("kicks", [-1, 1001, 2.5, True])
+def test_bad_kicks_name_the_value(solved, kicks) -> None:
+    problem, _ = solved
+    with pytest.raises(ParameterError, match=rf"kicks must be an integer in \[0, 1000\], "
+                                             rf"got {kicks!r}"):
+        solve_serial(problem, kicks=kicks)
+
+
+def test_kicks_zero_still_reaches_the_optimum(arm) -> None:
+    problem = _small_problem(arm)
+    result = solve_serial(problem, seed=1, kicks=0)
+    assert result.planned_time == pytest.approx(_brute_force(problem), rel=1e-9)
+
+
+def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> None:
+    """With one GA search allowed, the repaired answer stands (still collision-free); with
+    no collision-free tour the limit raises."""
+    import subtask_opt.arm.serial_problem as serial_problem
+
+    monkeypatch.setattr(serial_problem, "MAX_ROUNDS", 1)
+    problem = _small_problem(arm)
+    path = solve_serial(problem, seed=0).tour_configurations()[1:-1]
+    checker = _BlockingChecker(list(zip(path[:-1], path[1:], strict=True)))
+    object.__setattr__(problem, "checker", checker)
+    result = solve_serial(problem, seed=0)
+    assert result.counts["ga_rounds"] == 1
+    assert result.counts["search_rounds"] >= 2
+    chosen = result.tour_configurations()
+    assert not any(checker.leg_in_collision(a, b, 0.01)
+                   for a, b in zip(chosen[:-1], chosen[1:], strict=True))
+
+    targets = make_targets(ROWS[:2], standoff=0.01, axis_step=180.0)
+    blocked = SerialProblem(targets, arm, HOME, check_collisions=False)
+    a, b = blocked.configurations
+    object.__setattr__(blocked, "checker", _BlockingChecker(
+        [(qa, qb) for qa in a for qb in b]))
+    with pytest.raises(NoPathError, match="still in the best tour after 1 searches"):
+        solve_serial(blocked, seed=0)
