@@ -541,9 +541,14 @@ def elkai_gtsp(layers: Sequence[Any], home: Any, leg_time: LegTime, *, seed: int
     entries = [int(u) for k, u in enumerate(tour)
                if cluster[u] != cluster[tour[k - 1]] and cluster[u] != 0]
     order = np.array([cluster[u] - 1 for u in entries], dtype=np.int64)
-    if len(order) != len(lay) or np.unique(order).size != len(lay):
-        raise RuntimeError(f"{owner}: LKH's tour does not visit each cluster once "
-                           "(Noon-Bean constant too small?)")
-    choice = np.empty(len(lay), dtype=np.int64)
-    choice[order] = local[entries]
+    if len(order) == len(lay) and np.unique(order).size == len(lay):
+        choice = np.empty(len(lay), dtype=np.int64)
+        choice[order] = local[entries]
+        return order, choice
+    # Under tight search limits (max_trials, time_limit) LKH may stop before every
+    # cluster's zero-cost chain is whole: keep the order of first visits and choose the
+    # configurations for it exactly.
+    _, first = np.unique(order, return_index=True)
+    order = order[np.sort(first)]
+    choice, _ = layered_shortest_path(lay, h, order, leg_time)
     return order, choice

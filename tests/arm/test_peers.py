@@ -191,6 +191,24 @@ def test_elkai_gtsp_search_limits_still_give_a_valid_answer():
     assert all(0 <= choice[i] < layers[i].shape[0] for i in range(15))
 
 
+def test_elkai_gtsp_repairs_a_tour_that_splits_a_cluster(monkeypatch):
+    """A tour LKH stopped early on (a cluster's configurations not in one run) is read as
+    the order of first visits, with the configurations chosen exactly for that order."""
+    from subtask_opt.arm import peers
+
+    layers = [np.full((2, 4), float(i)) + np.arange(2)[:, None] for i in range(4)]
+    home = np.zeros(4)
+    # nodes: 0 home, then two per target (1-2: target 0, 3-4: target 1, ...); target 0's
+    # two configurations are visited apart, around target 2's
+    split = np.array([0, 1, 5, 6, 2, 3, 4, 7, 8])
+    monkeypatch.setattr(peers, "_lkh_tour", lambda *a, **k: split)
+    leg = max_joint_metric(VMAX)
+    order, choice = elkai_gtsp(layers, home, leg)
+    np.testing.assert_array_equal(order, [0, 2, 1, 3])
+    expected, _ = layered_shortest_path(layers, home, order, leg)
+    np.testing.assert_array_equal(choice, expected)
+
+
 def test_elkai_gtsp_single_configuration():
     order, choice = elkai_gtsp([np.zeros((1, 4))], np.ones(4), max_joint_metric(VMAX))
     np.testing.assert_array_equal(order, [0])
