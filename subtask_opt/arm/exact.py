@@ -662,6 +662,7 @@ class _GtspModel:
         self.n_edges = len(self.iu)
         self.incumbent: np.ndarray | None = None
         self.incumbent_cost = math.inf
+        self.incumbent_tour = np.empty(0, dtype=np.int64)
         with quiet_stdout():  # HiGHS prints its banner on construction
             h = highspy.Highs()
         h.setOptionValue("output_flag", False)
@@ -695,6 +696,7 @@ class _GtspModel:
         sol[self.n_edges + inner] = 1.0
         self.incumbent = sol
         self.incumbent_cost = float(self.c[tour, np.roll(tour, -1)].sum())
+        self.incumbent_tour = tour
 
     def _run(self, deadline: float | None) -> np.ndarray:
         highspy, h = self.highspy, self.h
@@ -719,21 +721,25 @@ class _GtspModel:
     def _add_cuts(self, sides: list[np.ndarray], pairs: list[tuple[int, int]] | None) -> None:
         """x(delta(S)) >= 2 for each S in ``sides`` (whole clusters), or with ``pairs``
         the generalised x(delta(S)) - 2 y(S & C_i) - 2 y(C_j - S) >= -2 (one addRows)."""
-        starts, cols, vals = [], [], []
+        starts: list[int] = []
+        cols: list[np.ndarray] = []
+        vals: list[np.ndarray] = []
+        nnz = 0
         for k, side in enumerate(sides):
             idx = np.flatnonzero(side[self.iu] != side[self.ju])
-            starts.append(sum(len(c) for c in cols))
+            starts.append(nnz)
             if pairs is None:
                 cols.append(idx)
                 vals.append(np.ones(len(idx)))
-                continue
-            i, j = pairs[k]
-            ys = np.flatnonzero(((self.sub == i) & side) | ((self.sub == j) & ~side))
-            cols.append(np.concatenate([idx, self.n_edges + ys]))
-            vals.append(np.concatenate([np.ones(len(idx)), np.full(len(ys), -2.0)]))
+            else:
+                i, j = pairs[k]
+                ys = np.flatnonzero(((self.sub == i) & side) | ((self.sub == j) & ~side))
+                cols.append(np.concatenate([idx, self.n_edges + ys]))
+                vals.append(np.concatenate([np.ones(len(idx)), np.full(len(ys), -2.0)]))
+            nnz += len(cols[-1])
         low = np.full(len(sides), 2.0 if pairs is None else -2.0)
         self.h.addRows(len(sides), low, np.full(len(sides), self.highspy.kHighsInf),
-                       sum(len(c) for c in cols), np.array(starts, dtype=np.int32),
+                       nnz, np.array(starts, dtype=np.int32),
                        np.concatenate(cols).astype(np.int32), np.concatenate(vals))
 
     def _cut_subtours(self, comps: list[list[int]]) -> None:
@@ -766,18 +772,18 @@ class _GtspModel:
         else:
             raise SubtaskOptError(f"gtsp_optimum: cuts still violated after {max_rounds} "
                                   f"rounds")
-        sol = self.h.getSolution()
+        final = self.h.getSolution()
         if self.incumbent is not None:  # reduced-cost fixing against the incumbent
             bound = self.h.getInfo().objective_function_value
             gap = self.incumbent_cost - bound + 1e-9 * abs(self.incumbent_cost)
-            value = np.asarray(sol.col_value)
+            value = np.asarray(final.col_value)
             # a tour using a column at 0 in the LP costs at least bound + its reduced cost
-            fixed = np.flatnonzero((np.asarray(sol.col_dual) > gap) & (value < 1e-9)
+            fixed = np.flatnonzero((np.asarray(final.col_dual) > gap) & (value < 1e-9)
                                    & (self.incumbent < 0.5)).astype(np.int32)
             if len(fixed):
                 self.h.changeColsBounds(len(fixed), fixed, np.zeros(len(fixed)),
                                         np.zeros(len(fixed)))
-        activity = np.asarray(sol.row_value)[n_rows:]
+        activity = np.asarray(final.row_value)[n_rows:]
         low = np.asarray(self.h.getLp().row_lower_)[n_rows:]
         slack = np.flatnonzero(activity > low + 1e-6) + n_rows
         if len(slack):
@@ -799,8 +805,15 @@ class _GtspModel:
             comps = self._cluster_components(x.astype(float))
             if len(comps) == 1:
                 return self.perm[self._tour(self.iu[x], self.ju[x])]
+            if self.incumbent is not None and (self.h.getInfo().objective_function_value
+                                               >= self.incumbent_cost * (1 - 1e-12)):
+                break  # nothing, subtours allowed, is cheaper: the incumbent is optimal
             self._cut_subtours(comps)
-        raise SubtaskOptError(f"gtsp_optimum: no single tour after {max_rounds} rounds of cuts")
+        else:
+            raise SubtaskOptError(f"gtsp_optimum: no single tour after {max_rounds} rounds "
+                                  f"of cuts")
+        tour = self.incumbent_tour
+        return np.roll(tour, -int(np.flatnonzero(self.sub[np.argsort(self.perm)[tour]] == 0)[0]))
 
     def _tour(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """The chosen nodes in tour order, from the node of cluster 0."""

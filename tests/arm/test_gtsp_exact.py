@@ -114,9 +114,11 @@ def test_an_incumbent_only_prunes():
     cost, clusters = _instance(3, [2] * 12, metric=True)
     value = gtsp_optimum(cost, clusters)[0]
     bad = np.array([np.flatnonzero(clusters == k)[-1] for k in range(12)])  # any tour
-    assert gtsp_optimum(cost, clusters, incumbent=bad)[0] == pytest.approx(value, rel=1e-12)
-    best = gtsp_optimum(cost, clusters)[2][::-1]  # the optimum itself, reversed
-    assert gtsp_optimum(cost, clusters, incumbent=best)[0] == pytest.approx(value, rel=1e-12)
+    best = np.roll(gtsp_optimum(cost, clusters)[2][::-1], 5)  # the optimum, turned round
+    for incumbent in (bad, best):
+        answer = gtsp_optimum(cost, clusters, incumbent=incumbent)
+        _check_answer(cost, clusters, *answer)
+        assert answer[0] == pytest.approx(value, rel=1e-12)
 
 
 def _brute_pair_minimum(w, y, clusters, i, j):
