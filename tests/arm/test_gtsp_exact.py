@@ -174,6 +174,8 @@ def test_bad_inputs():
         gtsp_optimum(cost, clusters, time_limit=0)
     with pytest.raises(ParameterError, match="incumbent"):
         gtsp_optimum(cost, clusters, incumbent=np.flatnonzero(clusters != 2))
+    with pytest.raises(ParameterError, match="incumbent"):
+        gtsp_optimum(cost, clusters, incumbent=[0, 2, 99])
 
 
 def test_time_limit_is_reported():
