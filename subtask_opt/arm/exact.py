@@ -654,7 +654,7 @@ class _GtspModel:
         except ImportError as exc:  # pragma: no cover - depends on the environment
             raise SubtaskOptError("gtsp_optimum needs highspy") from exc
         self.highspy = highspy
-        self.c = c
+        self.c, self.clusters = c, clusters
         self.perm = np.argsort(clusters, kind="stable")  # internal node u is perm[u]
         self.sub = clusters[self.perm]
         m, n = len(self.sub), int(self.sub[-1]) + 1
@@ -690,8 +690,7 @@ class _GtspModel:
     def set_incumbent(self, tour: np.ndarray) -> None:
         """Keep ``tour`` (original node indices) as a starting solution for branching."""
         if (tour.ndim != 1 or np.any((tour < 0) | (tour >= self.m))
-                or sorted(self.sub[np.argsort(self.perm)[tour]].tolist())
-                != list(range(self.n))):
+                or sorted(self.clusters[tour].tolist()) != list(range(self.n))):
             raise ParameterError("gtsp_optimum.incumbent must visit one node of every cluster")
         inner = np.argsort(self.perm)[tour]
         a, b = np.minimum(inner, np.roll(inner, -1)), np.maximum(inner, np.roll(inner, -1))
@@ -811,15 +810,16 @@ class _GtspModel:
             comps = self._cluster_components(x.astype(float))
             if len(comps) == 1:
                 return self.perm[self._tour(self.iu[x], self.ju[x])]
-            if self.incumbent is not None and (self.h.getInfo().objective_function_value
-                                               >= self.incumbent_cost * (1 - 1e-12)):
+            if self.incumbent is not None and (
+                    h.getInfo().objective_function_value
+                    >= self.incumbent_cost - 1e-12 * abs(self.incumbent_cost)):
                 break  # nothing, subtours allowed, is cheaper: the incumbent is optimal
             self._cut_subtours(comps)
         else:
             raise SubtaskOptError(f"gtsp_optimum: no single tour after {max_rounds} rounds "
                                   f"of cuts")
         tour = self.incumbent_tour
-        return np.roll(tour, -int(np.flatnonzero(self.sub[np.argsort(self.perm)[tour]] == 0)[0]))
+        return np.roll(tour, -int(np.flatnonzero(self.clusters[tour] == 0)[0]))
 
     def _tour(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """The chosen nodes in tour order, from the node of cluster 0."""
