@@ -13,9 +13,9 @@ model at fixed elbow-down configurations, a TSP):
   ``--set-seed + k``), never used for tuning.
 
 Each optimum is certified once, not taken from our runs: the TSP by the subtour-cut
-MILP (:func:`subtask_opt.milp_optimum`), the GTSP by the MILP below (one
-configuration per subtask, degree 2 at the chosen configurations, cuts across
-every set of subtasks a subtour closes), both with HiGHS; a GTSP not proven within
+MILP (:func:`subtask_opt.milp_optimum`), the GTSP by the branch and cut of
+:func:`subtask_opt.arm.exact.gtsp_optimum` (one configuration per subtask,
+generalised cut constraints), both with HiGHS; a GTSP not proven within
 ``--gtsp-time-limit`` is judged against the best answer known (ours or elkai's) and
 flagged in the table. The default
 ``solve()`` then runs from seeds 0..``--seeds - 1``; a run hits when its time is
@@ -44,17 +44,15 @@ import argparse
 import json
 import statistics
 import time
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from subtask_opt import SequencingProblem, builtin_case, load_arm, milp_optimum, solve
-from subtask_opt.arm.exact import _components, _walk, tour_length
+from subtask_opt.arm.exact import gtsp_optimum, tour_length
 from subtask_opt.arm.peers import noon_bean_matrix
 from subtask_opt.arm.tasks import random_subtasks
-from subtask_opt.base.files import quiet_stdout
+from subtask_opt.base.errors import SubtaskOptError
 from subtask_opt.base.progress import progress_bar
 
 REL_TOL = 1e-9
@@ -92,139 +90,30 @@ def _configuration_nodes(problem: SequencingProblem) -> tuple[np.ndarray, np.nda
     return cost, sub, branch
 
 
-def _min_cut(w: np.ndarray) -> tuple[float, np.ndarray]:
-    """Stoer-Wagner global minimum cut of the symmetric weights ``w``: (value, one side)."""
-    w = w.astype(float).copy()
-    n = len(w)
-    members = [[v] for v in range(n)]
-    alive = list(range(n))
-    best, best_side = np.inf, np.array([0])
-    while len(alive) > 1:
-        rest = alive[1:]
-        key = w[alive[0], rest].copy()  # weight from the vertices added so far
-        prev = last = alive[0]
-        while rest:  # add the most tightly connected vertex
-            k = int(np.argmax(key))
-            prev, last = last, rest.pop(k)
-            cut = float(key[k])
-            key = np.delete(key, k) + (w[last, rest] if rest else 0.0)
-        if cut < best:
-            best, best_side = cut, np.array(members[last])
-        w[prev, :] += w[last, :]  # merge the last two vertices of the phase
-        w[:, prev] += w[:, last]
-        w[prev, prev] = 0.0
-        members[prev] += members[last]
-        alive.remove(last)
-    return best, best_side
+def certify(problem: SequencingProblem, time_limit: float, order: np.ndarray) -> float | None:
+    """The certified optimum (None: the GTSP was not proven within ``time_limit``).
 
-
-def gtsp_optimum(problem: SequencingProblem, time_limit: float = 60.0, max_rounds: int = 500
-                 ) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """Certified minimum time of a configured (GTSP) closed tour, by MILP with HiGHS.
-
-    Binary x_e per edge between configurations of different subtasks, y_v per
-    configuration: one configuration per subtask, degree 2 y_v at each. Subtour
-    cuts x(delta(S)) >= 2 over sets S of subtasks (valid: the tour enters and
-    leaves every proper subset of subtasks): first on the LP relaxation (its
-    support's components, then the global minimum cut of the subtask graph), then
-    on each integer solution's subtours until it is one tour.
-
-    Returns ``(time, order, configurations)``, or None if not proven within
-    ``time_limit`` seconds.
+    The GTSP goes to :func:`subtask_opt.arm.exact.gtsp_optimum` with the tour
+    ``order`` (at its best configurations) as the incumbent: it only lets branch and
+    bound prune (and fix edges) from the start; the optimum returned is proven
+    either way, and is below the incumbent when there is a better tour.
     """
-    import highspy
-
+    if not problem.optimizes_configurations:
+        return milp_optimum(problem.matrix)[0]
     cost, sub, branch = _configuration_nodes(problem)
-    m, n = len(sub), int(sub.max()) + 1
-    iu, ju = np.triu_indices(m, 1)
-    keep = sub[iu] != sub[ju]
-    iu, ju = iu[keep], ju[keep]
-    n_edges = len(iu)
-    with quiet_stdout():
-        h = highspy.Highs()
-    h.setOptionValue("output_flag", False)
-    h.setOptionValue("mip_rel_gap", 0.0)
-    n_cols = n_edges + m
-    h.addCols(n_cols, np.concatenate([cost[iu, ju], np.zeros(m)]), np.zeros(n_cols),
-              np.ones(n_cols), 0, np.array([], dtype=np.int32), np.array([], dtype=np.int32),
-              np.array([]))
-    for i in range(n):  # one configuration per subtask
-        idx = (n_edges + np.flatnonzero(sub == i)).astype(np.int32)
-        h.addRow(1.0, 1.0, len(idx), idx, np.ones(len(idx)))
-    for v in range(m):  # degree 2 at a chosen configuration, 0 elsewhere
-        idx = np.concatenate([np.flatnonzero((iu == v) | (ju == v)), [n_edges + v]])
-        h.addRow(0.0, 0.0, len(idx), idx.astype(np.int32),
-                 np.concatenate([np.ones(len(idx) - 1), [-2.0]]))
-
-    def cut(subtasks: np.ndarray) -> None:
-        inside = np.isin(sub, subtasks)
-        idx = np.flatnonzero(inside[iu] != inside[ju]).astype(np.int32)
-        h.addRow(2.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
-
-    deadline = time.perf_counter() + time_limit
-
-    def run() -> np.ndarray:
-        h.setOptionValue("time_limit", max(1e-3, deadline - time.perf_counter()))
-        h.run()
-        if h.getModelStatus() == highspy.HighsModelStatus.kTimeLimit:
-            raise TimeoutError
-        if h.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-            raise RuntimeError(f"HiGHS: {h.modelStatusToString(h.getModelStatus())}")
-        return np.asarray(h.getSolution().col_value)[:n_edges]
-
+    _, configurations = problem.decode(order)
+    node = {(int(i), int(c)): v for v, (i, c) in enumerate(zip(sub, branch, strict=True))}
+    incumbent = [node[(int(i), int(configurations[i]))] for i in order]
     try:
-        x = _cut_rounds(run, cut, n, sub[iu], sub[ju], h, n_cols, max_rounds)
-    except TimeoutError:
+        return gtsp_optimum(cost, sub, incumbent=incumbent, time_limit=time_limit)[0]
+    except SubtaskOptError as exc:
+        if "not proven" not in str(exc):
+            raise
         return None
-    order = _walk(n, sub[iu[x]], sub[ju[x]])
-    configurations = np.zeros(n, dtype=np.int64)
-    chosen = np.unique(np.concatenate([iu[x], ju[x]]))
-    configurations[sub[chosen]] = branch[chosen]
-    return float(cost[iu[x], ju[x]].sum()), order, configurations
-
-
-def _cut_rounds(run: Callable[[], np.ndarray], cut: Callable[[np.ndarray], None], n: int,
-                a: np.ndarray, b: np.ndarray, h: Any, n_cols: int,
-                max_rounds: int) -> np.ndarray:
-    """The subtour cuts of :func:`gtsp_optimum` (edges join subtasks ``a[e]``, ``b[e]``):
-    rounds on the LP relaxation, then integer rounds; the tour's edge mask."""
-    import highspy
-
-    for _ in range(max_rounds):
-        w = np.zeros((n, n))
-        np.add.at(w, (a, b), run())
-        w = w + w.T
-        comps = _components(n, *np.nonzero(np.triu(w > 1e-9, 1)))
-        if len(comps) > 1:
-            for comp in comps:
-                cut(np.array(comp))
-            continue
-        value, side = _min_cut(w)
-        if value >= 2.0 - 1e-6:
-            break
-        cut(side)
-    h.changeColsIntegrality(n_cols, np.arange(n_cols, dtype=np.int32),
-                            np.full(n_cols, highspy.HighsVarType.kInteger))
-    for _ in range(max_rounds):
-        x = run() > 0.5
-        comps = _components(n, a[x], b[x])
-        if len(comps) == 1:
-            return x
-        for comp in comps:
-            cut(np.array(comp))
-    raise RuntimeError(f"gtsp_optimum: no single tour after {max_rounds} rounds of cuts")
-
-
-def certify(problem: SequencingProblem, time_limit: float) -> float | None:
-    """The certified optimum (None: the GTSP MILP did not finish within ``time_limit``)."""
-    if problem.optimizes_configurations:
-        found = gtsp_optimum(problem, time_limit)
-        return None if found is None else found[0]
-    return milp_optimum(problem.matrix)[0]
 
 
 def run_ours(problem: SequencingProblem, seeds: int) -> dict:
-    costs, walls, searches, generations = [], [], [], []
+    costs, walls, searches, generations, orders = [], [], [], [], []
     for seed in range(seeds):
         t = time.perf_counter()
         r = solve(problem, seed=seed)
@@ -232,7 +121,9 @@ def run_ours(problem: SequencingProblem, seeds: int) -> dict:
         searches.append(r.runtime_s)
         costs.append(r.total_time)
         generations.append(r.generations)
-    return {"costs": costs, "wall_s": walls, "search_s": searches, "generations": generations}
+        orders.append(r.order.tolist())
+    return {"costs": costs, "wall_s": walls, "search_s": searches, "generations": generations,
+            "best_order": orders[int(np.argmin(costs))]}
 
 
 def _elkai_tour(matrix: list[list[int]]) -> np.ndarray:
@@ -313,13 +204,13 @@ def main() -> None:
     rows = []
     with progress_bar(True, total=len(cases), desc="instances") as bar:
         for robot, model, family, name, problem in cases:
+            ours = run_ours(problem, args.seeds)
             t = time.perf_counter()
-            optimum = certify(problem, args.gtsp_time_limit)
+            optimum = certify(problem, args.gtsp_time_limit, np.array(ours["best_order"]))
             certify_s = time.perf_counter() - t
             row = {"robot": robot, "model": model, "family": family, "instance": name,
                    "n": problem.size, "optimum": optimum, "certify_s": certify_s,
-                   "ours": run_ours(problem, args.seeds),
-                   "elkai": run_elkai(problem, args.peer_repeats)}
+                   "ours": ours, "elkai": run_elkai(problem, args.peer_repeats)}
             _judge(row)
             rows.append(row)
             bar.update()
