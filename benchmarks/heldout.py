@@ -49,8 +49,10 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt import SequencingProblem, builtin_case, load_arm, milp_optimum, solve
-from subtask_opt.arm.exact import gtsp_optimum, tour_length
+from subtask_opt.arm.configurations import configuration_graph
+from subtask_opt.arm.exact import tour_length
 from subtask_opt.arm.peers import noon_bean_matrix
+from subtask_opt.arm.sequencing import proven_configured_optimum
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import SubtaskOptError
 from subtask_opt.base.progress import progress_bar
@@ -79,15 +81,7 @@ def instances(arm_name: str, model: str, sets: int, set_seed: int
 def _configuration_nodes(problem: SequencingProblem) -> tuple[np.ndarray, np.ndarray,
                                                                 np.ndarray]:
     """(cost between configuration nodes, subtask of each node, branch of each node)."""
-    t = problem.timing.branch_times
-    assert t is not None
-    n = t.shape[0]
-    reach = np.isfinite(problem.timing.branch_joints).all(axis=2)  # (N, 2)
-    sub, branch = np.nonzero(reach)  # grouped by subtask, as Noon-Bean needs
-    cost = t[sub[:, None], branch[:, None], sub[None, :], branch[None, :]]
-    assert np.all(np.isfinite(cost)) and np.allclose(cost, cost.T, rtol=1e-12, atol=0.0)
-    assert np.array_equal(np.unique(sub), np.arange(n))
-    return cost, sub, branch
+    return configuration_graph(problem.timing.branch_times, problem.timing.branch_joints)
 
 
 def certify(problem: SequencingProblem, time_limit: float, order: np.ndarray) -> float | None:
@@ -100,12 +94,9 @@ def certify(problem: SequencingProblem, time_limit: float, order: np.ndarray) ->
     """
     if not problem.optimizes_configurations:
         return milp_optimum(problem.matrix)[0]
-    cost, sub, branch = _configuration_nodes(problem)
     _, configurations = problem.decode(order)
-    node = {(int(i), int(c)): v for v, (i, c) in enumerate(zip(sub, branch, strict=True))}
-    incumbent = [node[(int(i), int(configurations[i]))] for i in order]
     try:
-        return gtsp_optimum(cost, sub, incumbent=incumbent, time_limit=time_limit)[0]
+        return proven_configured_optimum(problem, order, configurations, time_limit)
     except SubtaskOptError as exc:
         if "not proven" not in str(exc):
             raise

@@ -158,5 +158,31 @@ def induced_matrix(branch_times: Any, configurations: Any) -> np.ndarray:
     return m
 
 
-__all__ = ["ConfiguredData", "best_configurations", "gather", "induced_matrix", "pack_data",
-           "pack_layers", "penalty_for", "penalty_for_legs"]
+def configuration_graph(branch_times: Any, branch_joints: Any
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The generalised TSP as a graph over the configurations within the joint limits.
+
+    Args:
+        branch_times: (N, 2, N, 2) leg times ``[i, ci, j, cj]``.
+        branch_joints: (N, 2, 2) joint angles per subtask and configuration (NaN where a
+            configuration is outside the limits).
+
+    Returns:
+        ``(cost, subtask, configuration)``: the (M, M) leg times between the M reachable
+        configurations (zero between two of one subtask), and each node's subtask and
+        configuration index, nodes grouped by subtask in index order (what
+        :func:`subtask_opt.arm.exact.gtsp_optimum` takes).
+    """
+    t = _validated_tensor(branch_times)
+    joints = np.asarray(branch_joints, dtype=float)
+    if joints.shape[:2] != t.shape[:2]:
+        raise ParameterError(f"branch_joints must have shape ({t.shape[0]}, 2, dof), got "
+                             f"{joints.shape}")
+    subtask, configuration = np.nonzero(np.isfinite(joints).all(axis=2))
+    cost = t[subtask[:, None], configuration[:, None], subtask[None, :], configuration[None, :]]
+    cost[subtask[:, None] == subtask[None, :]] = 0.0
+    return cost, subtask, configuration
+
+
+__all__ = ["ConfiguredData", "best_configurations", "configuration_graph", "gather",
+           "induced_matrix", "pack_data", "pack_layers", "penalty_for", "penalty_for_legs"]

@@ -671,7 +671,6 @@ class _GtspModel:
             h = highspy.Highs()
         h.setOptionValue("output_flag", False)
         h.setOptionValue("mip_rel_gap", 0.0)
-        h.setOptionValue("threads", 1)
         n_cols = self.n_edges + m
         weights = c[self.perm[self.iu], self.perm[self.ju]]
         h.addCols(n_cols, np.concatenate([weights, np.zeros(m)]), np.zeros(n_cols),

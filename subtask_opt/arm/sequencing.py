@@ -468,9 +468,10 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             default: ``params.default_stop()``.
         params: solver parameters (default: ``SolverParams()``).
         progress: show a progress bar on stderr (a terminal only) for runs over a second.
-        certify: prove optimality with the exact MILP (symmetric costs, fixed
-            configurations) within ``certify_time_limit`` seconds; the outcome is
-            in :attr:`Result.certified`.
+        certify: prove optimality within ``certify_time_limit`` seconds with an exact
+            method (a MILP over the order for fixed configurations; branch and cut over
+            order and configurations when they are chosen, closed tours without
+            precedence); the outcome is in :attr:`Result.certified`.
         constraints: the tour shape (closed from a start, open to a fixed or
             free end, a home visited first and last) and precedence pairs
             (:class:`~subtask_opt.arm.constraints.TourConstraints`); default a
@@ -594,7 +595,8 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     total_time = float(np.sum(legs))
     certified = None
     if certify:
-        certified = _certify(problem, canon, total_time, certify_time_limit)
+        certified = _certify(problem, canon, total_time, certify_time_limit, tour,
+                             configs if configured else None)
     return Result(
         order=canon.user_order(tour),
         total_time=total_time,
@@ -692,19 +694,26 @@ def _with_home(problem: SequencingProblem, home: tuple[float, float]) -> Sequenc
 
 
 def _certify(problem: SequencingProblem | MatrixProblem, canon: Canonical, total: float,
-             time_limit: float) -> str:
-    """Prove ``total`` optimal with the MILP, or say why not.
+             time_limit: float, tour: np.ndarray, configs: np.ndarray | None) -> str:
+    """Prove ``total`` optimal with an exact method, or say why not.
 
-    A symmetric closed tour uses the subtour-cut MILP; anything else (asymmetric
-    costs, an open path, a home, precedence) the MTZ MILP of the canonical form.
+    Chosen configurations (``configs``): the generalised-TSP branch and cut
+    (:func:`~subtask_opt.arm.exact.gtsp_optimum`, this answer as its incumbent) for a
+    closed tour without precedence. Fixed configurations: a symmetric closed tour uses
+    the subtour-cut MILP; anything else (asymmetric costs, an open path, a home,
+    precedence) the MTZ MILP of the canonical form.
     """
     from subtask_opt.arm.exact import milp_optimum, milp_pinned
 
     require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
-    if isinstance(problem, SequencingProblem) and problem.optimizes_configurations:
-        return "not certified: the MILP handles fixed configurations only"
     try:
-        if canon.open_path and not canon.pairs.size and problem.symmetric:
+        if configs is not None:
+            assert isinstance(problem, SequencingProblem)
+            if canon.open_path or canon.pairs.size:
+                return ("not certified: with chosen configurations only closed tours "
+                        "without precedence are certified")
+            optimum = proven_configured_optimum(problem, tour, configs, time_limit)
+        elif canon.open_path and not canon.pairs.size and problem.symmetric:
             m, offset = symmetric_path_matrix(problem.matrix, canon.first,
                                               None if canon.last < 0 else canon.last)
             optimum = milp_optimum(m, time_limit=time_limit)[0] - offset
@@ -721,6 +730,31 @@ def _certify(problem: SequencingProblem | MatrixProblem, canon: Canonical, total
         return "optimal (proven)"
     excess = 100 * (total / optimum - 1)
     return f"not optimal: the proven optimum is {optimum:.6g} ({excess:.4f}% less)"
+
+
+def proven_configured_optimum(problem: SequencingProblem, tour: np.ndarray,
+                              configs: np.ndarray, time_limit: float) -> float:
+    """The proven optimum of a closed tour over orders and configurations (the
+    generalised TSP of a problem that chooses configurations), by
+    :func:`~subtask_opt.arm.exact.gtsp_optimum` with ``tour`` at ``configs`` (per subtask)
+    as its incumbent, which only speeds the proof up.
+
+    Raises:
+        SubtaskOptError: not proven within ``time_limit`` seconds, or leg times that are
+            not finite and symmetric between the reachable configurations.
+    """
+    from subtask_opt.arm.configurations import configuration_graph
+    from subtask_opt.arm.exact import gtsp_optimum
+
+    cost, subtask, configuration = configuration_graph(problem.timing.branch_times,
+                                                       problem.timing.branch_joints)
+    if not np.all(np.isfinite(cost)) or not np.allclose(cost, cost.T, rtol=1e-9, atol=1e-12):
+        raise SubtaskOptError("the generalised-TSP certificate needs finite, symmetric "
+                              "leg times between the configurations")
+    node = {(int(i), int(c)): v for v, (i, c) in
+            enumerate(zip(subtask.tolist(), configuration.tolist(), strict=True))}
+    incumbent = [node[(int(i), int(configs[i]))] for i in tour]
+    return gtsp_optimum(cost, subtask, incumbent=incumbent, time_limit=time_limit)[0]
 
 
 def _rotate(tour: np.ndarray, first: int) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -16,6 +18,7 @@ from subtask_opt import (
     solve,
 )
 from subtask_opt.arm.exact import held_karp, milp_optimum
+from subtask_opt.arm.sequencing import proven_configured_optimum
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
 from tests.conftest import size
@@ -166,11 +169,37 @@ def test_lower_bound_is_below_the_certified_optimum_and_the_answer(arm, seed):
     assert d["lower_bound"] == result.lower_bound and d["gap_bound"] == result.gap_bound
 
 
-def test_configured_problems_get_a_bound_but_no_milp_certificate(arm):
-    problem = SequencingProblem(random_subtasks(arm, 8, seed=3), arm, time_model="joint")
+def _gtsp_brute_force(problem) -> float:
+    """Every cyclic order and every choice of reachable configurations."""
+    t = problem.timing.branch_times
+    reach = np.isfinite(problem.timing.branch_joints).all(axis=2)
+    n = t.shape[0]
+    combos = np.array(list(itertools.product(*[np.flatnonzero(reach[i]) for i in range(n)])))
+    best = np.inf
+    for rest in itertools.permutations(range(1, n)):
+        if rest[0] > rest[-1]:  # symmetric legs: each cycle once
+            continue
+        o = (0, *rest)
+        total = sum(t[o[k], combos[:, o[k]], o[(k + 1) % n], combos[:, o[(k + 1) % n]]]
+                    for k in range(n))
+        best = min(best, float(total.min()))
+    return best
+
+
+@pytest.mark.parametrize(("robot", "seed"), [("planar_2r", 3), ("asr_twodof", 4)])
+def test_chosen_configurations_are_certified_against_brute_force(robot, seed):
+    arm = load_arm(robot)
+    problem = SequencingProblem(random_subtasks(arm, 7, seed=seed), arm, time_model="joint")
+    assert problem.optimizes_configurations
+    optimum = _gtsp_brute_force(problem)
     result = solve(problem, seed=0, certify=True)
     assert result.lower_bound is not None and result.lower_bound <= result.total_time
-    assert result.certified is not None and result.certified.startswith("not certified")
+    assert result.total_time == pytest.approx(optimum, rel=1e-12)
+    assert result.certified == "optimal (proven)"
+    # a poor incumbent (the index order, first reachable configurations) changes nothing
+    first = np.argmax(np.isfinite(problem.timing.branch_joints).all(axis=2), axis=1)
+    proven = proven_configured_optimum(problem, np.arange(7), first, 60.0)
+    assert proven == pytest.approx(optimum, rel=1e-12)
 
 
 def test_no_bound_above_the_size_limit(arm):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.base.errors import ParameterError
@@ -351,8 +351,10 @@ def test_asymmetric_moves_report_their_cost_change(seed, n, flip):
     m = _points_matrix(seed, n) + rng.random((n, n))
     aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=6)
     tour = rng.permutation(n).astype(np.int64)
-    # a random tour has improving moves; the test must exercise them
-    assert _apply_moves(move, tour, m, aux.neighbours, rng) > 0
+    # the cost checks are in _apply_moves; an example where no move applies (a short random
+    # tour can already be a local optimum of these moves, e.g. seed 4312, n 8) checks
+    # nothing, so it is drawn again
+    assume(_apply_moves(move, tour, m, aux.neighbours, rng) > 0)
 
 
 @settings(max_examples=25, deadline=None)
