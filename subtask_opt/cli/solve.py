@@ -85,8 +85,8 @@ def register(root: argparse._SubParsersAction) -> None:
                    help="solver preset (default: micro-GA with local search)")
     p.add_argument("--seed", type=seed, default=0, help="solver seed in [0, 2**63) (default 0)")
     p.add_argument("--certify", action="store_true",
-                   help="prove the answer optimal with the exact MILP (symmetric costs, fixed "
-                        "configurations), or report the remaining gap")
+                   help="prove the answer optimal (a MILP for fixed configurations, a branch "
+                        "and cut when the elbows are chosen), or report the remaining gap")
     p.add_argument("--certify-time-limit", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
                    default=60.0, metavar="SECONDS", help="time for --certify (default 60)")
     limits = p.add_argument_group("joint limits (replace the robot's; a scalar or one per joint)")
