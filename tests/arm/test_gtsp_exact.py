@@ -68,7 +68,6 @@ def _plain_gtsp_milp(cost: np.ndarray, clusters: np.ndarray) -> float:
     h = highspy.Highs()
     h.setOptionValue("output_flag", False)
     h.setOptionValue("mip_rel_gap", 0.0)
-    h.setOptionValue("threads", 1)
     empty = np.array([], dtype=np.int32)
     h.addCols(ne + m, np.concatenate([cost[iu, ju], np.zeros(m)]), np.zeros(ne + m),
               np.ones(ne + m), 0, empty, empty, np.array([]))
@@ -81,8 +80,9 @@ def _plain_gtsp_milp(cost: np.ndarray, clusters: np.ndarray) -> float:
         idx = np.append(np.flatnonzero((iu == v) | (ju == v)), ne + v).astype(np.int32)
         vals = np.append(np.ones(len(idx) - 1), -2.0)
         h.addRow(0.0, 0.0, len(idx), idx, vals)
-    while True:
+    for _ in range(200):
         h.run()
+        assert h.getModelStatus() == highspy.HighsModelStatus.kOptimal
         x = np.asarray(h.getSolution().col_value)[:ne] > 0.5
         label = np.arange(n)  # clusters joined by the chosen edges
         for a, b in zip(clusters[iu[x]], clusters[ju[x]], strict=True):
@@ -93,6 +93,7 @@ def _plain_gtsp_milp(cost: np.ndarray, clusters: np.ndarray) -> float:
             inside = np.isin(clusters, np.flatnonzero(label == comp))
             idx = np.flatnonzero(inside[iu] != inside[ju]).astype(np.int32)
             h.addRow(2.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
+    raise AssertionError("the plain MILP found no single tour in 200 rounds of cuts")
 
 
 @pytest.mark.parametrize("seed", range(3))
