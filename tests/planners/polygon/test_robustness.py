@@ -332,6 +332,10 @@ def walled_worlds(draw):
             hull = convex_hull(np.vstack([pts, *extra]) if extra else pts)
             if len(hull) < 3 or Polygon(hull).area < 5.0:
                 continue
+            try:  # the hull of nearly collinear points can fold back in floating point
+                PolygonWorld((0.0, 0.0, 100.0, 100.0), (hull,), name="one")
+            except InputDataError:
+                continue
             obstacles.append(hull)
     return PolygonWorld((0.0, 0.0, 100.0, 100.0), tuple(obstacles), name="walled")
 
