@@ -24,7 +24,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -208,13 +208,7 @@ class _TspModel:
         highspy, h, iu, ju = self.highspy, self.h, self.iu, self.ju
         n = self.m.shape[0]
         for _ in range(max_rounds):
-            if deadline is not None:
-                left = deadline - time.perf_counter()
-                if left <= 0:
-                    raise SubtaskOptError(f"milp_optimum: not proven within {time_limit} s")
-                h.setOptionValue("time_limit", left)
-            h.run()
-            status = h.getModelStatus()
+            status = _run_highs(h, deadline, f"milp_optimum: not proven within {time_limit} s")
             if status == highspy.HighsModelStatus.kInfeasible:
                 raise _Infeasible("no tour satisfies the cuts")
             if status != highspy.HighsModelStatus.kOptimal:
@@ -237,6 +231,19 @@ class _TspModel:
                         for a, b in zip(order.tolist(), np.roll(order, -1).tolist(),
                                         strict=True)], dtype=np.int32)
         self.h.addRow(-self.highspy.kHighsInf, n - 1.0, n, idx, np.ones(n))
+
+
+def _run_highs(h: Any, deadline: float | None, late: str) -> Any:
+    """Run the HiGHS model ``h`` in the time left before ``deadline`` (perf_counter
+    seconds; None: no limit) and return its model status; raise ``late`` (a
+    :class:`SubtaskOptError` message) when no time is left."""
+    if deadline is not None:
+        left = deadline - time.perf_counter()
+        if left <= 0:
+            raise SubtaskOptError(late)
+        h.setOptionValue("time_limit", left)
+    h.run()
+    return h.getModelStatus()
 
 
 def _components(n: int, a: np.ndarray, b: np.ndarray) -> list[list[int]]:
@@ -704,13 +711,7 @@ class _GtspModel:
 
     def _run(self, deadline: float | None) -> np.ndarray:
         highspy, h = self.highspy, self.h
-        if deadline is not None:
-            left = deadline - time.perf_counter()
-            if left <= 0:
-                raise SubtaskOptError("gtsp_optimum: not proven within the time limit")
-            h.setOptionValue("time_limit", left)
-        h.run()
-        status = h.getModelStatus()
+        status = _run_highs(h, deadline, "gtsp_optimum: not proven within the time limit")
         if status == highspy.HighsModelStatus.kTimeLimit:
             raise SubtaskOptError("gtsp_optimum: not proven within the time limit")
         if status != highspy.HighsModelStatus.kOptimal:
