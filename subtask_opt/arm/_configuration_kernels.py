@@ -407,36 +407,74 @@ def iterated_configured_search(genes, n, data, aux, rng, kicks):
     return n
 
 
+BALL_SHARE = 0.5
+"""Share of configuration kicks that switch the targets nearest a random one (the others
+move both ends of a run of one configuration)."""
+WALK_SLACK = 0.003
+"""Configuration kicks walk on from a result up to this share longer than the last one."""
+
+
 @njit(cache=True, inline="always")
 def configuration_kicks(genes, n, data, aux, rng, kicks):
-    """``kicks`` rounds of: switch every target of a random run of consecutive targets to
-    another configuration, let the order adapt to those configurations (neighbour-list
-    search and relocations, :func:`_symmetric_round`), then decode and search as usual
-    (:func:`local_search`); the result is kept if it is shorter. Order moves that keep
-    the configurations rarely move many targets across a change of elbow at once; this
-    kick does. Returns the tour time."""
+    """``kicks`` rounds of: switch a set of targets to another configuration, let the
+    order adapt to those configurations (neighbour-list search and relocations,
+    :func:`_symmetric_round`), then decode and search as usual (:func:`local_search`).
+    Order moves that keep the configurations rarely move many targets across a change
+    of elbow at once; these kicks do. The set is either the targets nearest a random
+    one, or, at two changes of configuration along the tour, the targets between the
+    change and a point up to a quarter of the tour away (a run of one configuration
+    grows or shrinks at both ends). Tours in the basins of different optima of the
+    held-out planar sets differ in such sets.
+
+    The kicks walk: each starts from the last result unless that was more than
+    :data:`WALK_SLACK` longer, so two kicks can cross a slightly worse tour. ``genes``
+    receives the shortest tour seen. Returns its time."""
     configs = np.empty(n, dtype=np.int64)
     cost = decode(genes, n, data, configs)
     trial = np.empty(n, dtype=genes.dtype)
     ext = np.empty(n + 1, dtype=genes.dtype)
     off = data.offsets
+    switches = np.empty(n, dtype=np.int64)
+    walk = genes[:n].copy()
+    walk_cost = cost
     for _ in range(kicks):
-        tsp.copy_run(trial, 0, genes, 0, n)
+        tsp.copy_run(trial, 0, walk, 0, n)
         decode(trial, n, data, configs)
-        start = rng.integers(0, n)
-        run = 2 + rng.integers(0, max(1, n // 3))
-        for q in range(run):
-            v = trial[(start + q) % n]
-            kv = off[v + 1] - off[v]
-            if kv > 1:
-                configs[v] = (configs[v] + 1 + rng.integers(0, kv - 1)) % kv
+        if rng.random() < BALL_SHARE:
+            # the targets nearest a random one
+            nearest = np.argsort(data.dist[trial[rng.integers(0, n)]])
+            for q in range(2 + rng.integers(0, max(1, n // 2))):
+                _flip(nearest[q], configs, off, rng)
+        else:
+            # both ends of a run of one configuration move, by up to a quarter of the tour
+            n_switch = 0
+            for k in range(n):
+                if configs[trial[k]] != configs[trial[k - 1]]:
+                    switches[n_switch] = k
+                    n_switch += 1
+            for _ in range(2):
+                k = switches[rng.integers(0, n_switch)] if n_switch > 0 else rng.integers(0, n)
+                shift = rng.integers(-(n // 4), n // 4 + 1)
+                for q in range(min(0, shift), max(0, shift)):
+                    _flip(trial[(k + q) % n], configs, off, rng)
         _symmetric_round(trial, n, data, aux, configs, ext)
         local_search(trial, n, data, aux)
         new = decode(trial, n, data, configs)
         if new < cost - 1e-12 * max(1.0, cost):
             cost = new
             tsp.copy_run(genes, 0, trial, 0, n)
+        if new < walk_cost * (1.0 + WALK_SLACK):
+            walk_cost = new
+            tsp.copy_run(walk, 0, trial, 0, n)
     return cost
+
+
+@njit(cache=True, inline="always")
+def _flip(v, configs, off, rng):
+    """Target ``v`` to a random other one of its configurations (if it has another)."""
+    kv = off[v + 1] - off[v]
+    if kv > 1:
+        configs[v] = (configs[v] + 1 + rng.integers(0, kv - 1)) % kv
 
 
 @njit(cache=True, inline="always")

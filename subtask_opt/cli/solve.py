@@ -139,7 +139,8 @@ def run(args: argparse.Namespace) -> int:
     stop = stop_criteria(args)
     params = SolverParams(preset=args.preset)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
-        stop = stop + params.default_stop(len(subtasks))
+        stop = stop + params.default_stop(len(subtasks),
+                                          configured=problem.optimizes_configurations)
     result = solve(problem, seed=args.seed, stop=stop, params=params,
                    progress=not args.no_progress, certify=args.certify,
                    certify_time_limit=args.certify_time_limit, constraints=constraints)

@@ -100,6 +100,15 @@ def test_same_seed_same_result(arm):
         assert (a.generations, a.restarts) == (b.generations, b.restarts)
 
 
+def test_choosing_configurations_doubles_the_default_stall(arm):
+    problem = SequencingProblem(builtin_case("random30", arm, seed=2), arm)
+    assert problem.optimizes_configurations  # the default joint model chooses the elbows
+    r = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0))  # no bound stop
+    fixed_stall = SolverParams().default_stop(30)[0]
+    assert isinstance(fixed_stall, NoImprovement)
+    assert r.generations - r.history.generation_of_best() == 2 * fixed_stall.generations
+
+
 def test_stopping_criteria_are_honoured():
     m = _euclidean(5, 25)
     problem = SequencingProblem.from_matrix(m)
