@@ -470,7 +470,8 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         problem: what to solve (an arm problem or a matrix problem).
         seed: random seed in [0, 2**63); the same seed gives the same result.
         stop: one stopping criterion or a list (any of them stops the run);
-            default: ``params.default_stop()``.
+            default: ``params.default_stop(N, configured=...)`` (``configured``: the
+            problem chooses its configurations).
         params: solver parameters (default: ``SolverParams()``).
         progress: show a progress bar on stderr (a terminal only) for runs over a second.
         certify: prove optimality within ``certify_time_limit`` seconds with an exact
