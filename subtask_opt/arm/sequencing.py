@@ -55,6 +55,7 @@ from subtask_opt.ga.config import GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import run_ga
 from subtask_opt.ga.permutation import (
+    KICKS_FROM,
     SEARCH_EXACT,
     SEARCH_FAST,
     SEARCH_PAPER,
@@ -147,7 +148,9 @@ class SolverParams:
                      configured: bool = False) -> list[StoppingCriterion]:
         """Stopping criteria used when :func:`solve` is given none, for ``size`` nodes;
         ``configured``: the search also chooses each subtask's configuration (a
-        generalised TSP), whose local optima are deeper: twice the stall."""
+        generalised TSP), whose local optima are deeper: twice the stall below
+        :data:`~subtask_opt.ga.permutation.KICKS_FROM` nodes, where the stall is the
+        search's only exploration (from there on every child carries N/10 kicks)."""
         if self.preset == "paper":
             return [NoImprovement(2000), MaxGenerations(50_000)]
         # 15 stalled generations reach the certified optimum of every built-in
@@ -160,7 +163,9 @@ class SolverParams:
         # Choosing configurations too, the held-out sets of 30 subtasks missed 7 of 400
         # runs at that stall and none at twice it (benchmarks/heldout.py).
         stall = max(15, min(15 + 3 * max(0, size - 30), 6000 // size), 10 + size // 100)
-        return [NoImprovement(2 * stall if configured else stall), MaxGenerations(50_000)]
+        if configured and size < KICKS_FROM:
+            stall *= 2
+        return [NoImprovement(stall), MaxGenerations(50_000)]
 
 
 @dataclass(frozen=True)

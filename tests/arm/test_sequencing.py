@@ -107,6 +107,8 @@ def test_choosing_configurations_doubles_the_default_stall(arm):
     fixed_stall = SolverParams().default_stop(30)[0]
     assert isinstance(fixed_stall, NoImprovement)
     assert r.generations - r.history.generation_of_best() == 2 * fixed_stall.generations
+    # from 100 nodes on every child carries kicks of its own: the stall stays
+    assert SolverParams().default_stop(200, configured=True) == SolverParams().default_stop(200)
 
 
 def test_stopping_criteria_are_honoured():
