@@ -421,10 +421,10 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
     :func:`_symmetric_round`), then decode and search as usual (:func:`local_search`).
     Order moves that keep the configurations rarely move many targets across a change
     of elbow at once; these kicks do. The set is either the targets around a random
-    one, or, at two changes of configuration along the tour, the targets between the
-    change and a point up to a quarter of the tour away (a run of one configuration
-    grows or shrinks at both ends). Tours in the basins of different optima of the
-    held-out planar sets differ in such sets.
+    one, or, at two changes of configuration along the tour drawn at random (possibly
+    the same one twice), the targets between the change and a point up to a quarter of
+    the tour away (a run of one configuration grows or shrinks at both ends). Tours in
+    the basins of different optima of the held-out planar sets differ in such sets.
 
     The kicks walk: each starts from the last result unless that was more than
     :data:`WALK_SLACK` longer, so two kicks can cross a slightly worse tour. ``genes``
@@ -449,7 +449,7 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
                 if data.dist[c, v] <= radius:
                     _flip(v, configs, off, rng)
         else:
-            # both ends of a run of one configuration move, by up to a quarter of the tour
+            # two ends of runs of one configuration move, by up to a quarter of the tour
             n_switch = 0
             for k in range(n):
                 if configs[trial[k]] != configs[trial[k - 1]]:
