@@ -49,6 +49,7 @@ bench: $(VENV)/.installed-bench
 	$(BIN)/python benchmarks/agv.py --json $(OUT)/bench/agv.json
 	$(BIN)/python benchmarks/tsplib.py --json $(OUT)/bench/tsplib.json
 	$(BIN)/python benchmarks/batch.py --json $(OUT)/bench/batch.json
+	$(BIN)/python benchmarks/elbows.py --json $(OUT)/bench/elbows.json
 
 papers: $(VENV)/.installed
 	for p in 000 001 002 003 004; do \

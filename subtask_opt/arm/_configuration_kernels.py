@@ -318,11 +318,36 @@ def _symmetric_round(genes, n, data, aux, configs, ext):
     has_home = data.home_out.shape[0] > 0
     m = _to_ext(genes, n, ext, has_home)
     home = n if has_home else -1
+    fixed = _fixed_matrix(data, configs)
+    fixed_configs = configs[:n].copy()
     for _ in range(100):  # bounded; a pass that gains nothing ends it earlier
-        tsp.local_search(ext, m, _fixed_matrix(data, configs), near_aux)
+        tsp.local_search(ext, m, fixed, near_aux)
         if relocate_pass(ext[:m], data, configs, home) <= 0.0:
             break
+        refresh_fixed(fixed, data, configs, fixed_configs)
     _from_ext(ext, n, genes, has_home)
+
+
+@njit(cache=True, inline="always")
+def refresh_fixed(fixed, data, configs, fixed_configs):
+    """Bring ``fixed`` (:func:`_fixed_matrix` of ``fixed_configs``) to ``configs``:
+    only the rows and columns of targets whose configuration changed, O(N) each where
+    rebuilding is O(N^2); ``fixed_configs`` receives ``configs``."""
+    n = data.dist.shape[0]
+    off = data.offsets
+    with_home = fixed.shape[0] > n
+    for v in range(n):
+        if configs[v] == fixed_configs[v]:
+            continue
+        fixed_configs[v] = configs[v]
+        row = off[v] + configs[v]
+        for j in range(n):
+            col = off[j] + configs[j]
+            fixed[v, j] = data.legs[row, col]
+            fixed[j, v] = data.legs[col, row]
+        if with_home:
+            fixed[n, v] = data.home_out[row]
+            fixed[v, n] = data.home_in[row]
 
 
 @njit(cache=True)
@@ -387,6 +412,22 @@ def _from_ext(ext, n, genes, has_home):
         genes[k] = ext[(h + 1 + k) % (n + 1)]
 
 
+CONFIGURATION_KICKS_MAX = 16
+"""Most configuration kicks after an iterated search (:func:`configuration_kick_count`)."""
+
+
+@njit(cache=True, inline="always")
+def configuration_kick_count(kicks):
+    """Configuration kicks after an iterated search of ``kicks`` double-bridge kicks:
+    two per kick (on the held-out planar sets of benchmarks/heldout.py one missed 23 of
+    260 joint-model runs, two 6, at about 1.5x the time), at most
+    :data:`CONFIGURATION_KICKS_MAX`. Each runs a local search of the whole tour: N/5 of
+    them per child made 200 elbow-choosing subtasks take 17-41 s of CPU and 500 about
+    6 minutes; 16 took 8-12 s and 14 s, with answers within the spread of the seeds
+    (3 seeds on 6 planar sets of 100-200 subtasks, one on 500)."""
+    return min(2 * kicks, CONFIGURATION_KICKS_MAX)
+
+
 @njit(cache=True)
 def iterated_configured_search(genes, n, data, aux, rng, kicks):
     """``kicks`` local double-bridge kicks of the tour (with home, if any) on the decoded
@@ -401,9 +442,7 @@ def iterated_configured_search(genes, n, data, aux, rng, kicks):
                               rng, kicks)
     _from_ext(ext, n, genes, has_home)
     if not has_home:
-        # two per kick: on the held-out planar sets of benchmarks/heldout.py one missed
-        # 23 of 260 joint-model runs, two 6 (at about 1.5x the time)
-        configuration_kicks(genes, n, data, aux, rng, 2 * kicks)
+        configuration_kicks(genes, n, data, aux, rng, configuration_kick_count(kicks))
     return n
 
 

@@ -315,3 +315,30 @@ def test_joint_limits_name_the_bad_field() -> None:
         joint_limits([1.0, 1.0], [1.0, 0.0])
     with pytest.raises(ParameterError, match="same length"):
         joint_limits([1.0, 1.0], [1.0])
+
+
+@pytest.mark.parametrize("home", [True, False])
+def test_refreshed_fixed_matrix_equals_a_rebuilt_one(home: bool) -> None:
+    # the incremental update after relocations against building the matrix again
+    rng = np.random.default_rng(7)
+    n = 9
+    _, offsets, legs, home_out, home_in = _random_instance(rng, n, 3)
+    data = (pack_layers(legs, offsets, home_out=home_out, home_in=home_in) if home
+            else pack_layers(legs, offsets))
+    counts = np.diff(offsets)
+    configs = np.array([rng.integers(0, k) for k in counts], dtype=np.int64)
+    fixed = gc._fixed_matrix(data, configs)
+    fixed_configs = configs.copy()
+    for _ in range(5):
+        changed = rng.choice(n, size=3, replace=False)
+        configs[changed] = [rng.integers(0, counts[v]) for v in changed]
+        gc.refresh_fixed(fixed, data, configs, fixed_configs)
+        np.testing.assert_array_equal(fixed, gc._fixed_matrix(data, configs))
+        np.testing.assert_array_equal(fixed_configs, configs)
+
+
+def test_configuration_kicks_are_two_per_kick_up_to_the_cap() -> None:
+    assert gc.configuration_kick_count(1) == 2
+    assert gc.configuration_kick_count(3) == 6
+    assert gc.configuration_kick_count(100) == gc.CONFIGURATION_KICKS_MAX
+    assert gc.CONFIGURATION_KICKS_MAX < 2 * 100  # N/10 kicks at 1000 targets are capped
