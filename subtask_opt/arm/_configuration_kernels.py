@@ -57,6 +57,11 @@ class ConfiguredData(NamedTuple):
             local search then uses the neighbour-list moves of
             :func:`subtask_opt.ga.permutation.local_search`, configuration-choosing
             relocations and kicks; empty (0, 0): the exact full-sweep search, any costs.
+        cheapest: with ``near``, (N, M): the cheapest leg between any configuration of
+            target v and configuration c, ``cheapest[v, c]``; the relocations' lower
+            bound, which skips most places unread when targets have many configurations
+            (legs blocked later only raise legs, so it stays a bound). Empty (0, 0): the
+            looser bound from ``dist``.
     """
 
     dist: np.ndarray
@@ -66,6 +71,7 @@ class ConfiguredData(NamedTuple):
     home_in: np.ndarray
     search: float
     near: np.ndarray = np.zeros((0, 0), dtype=np.int64)
+    cheapest: np.ndarray = np.zeros((0, 0))
 
 
 @njit(cache=True)
@@ -176,24 +182,29 @@ def _induced_with_home(data, configs):
 
 @njit(cache=True)
 def block_minima(legs, offsets):
-    """(N, N) cheapest leg between each pair of targets (zero diagonal) and the largest leg,
-    one pass over the (M, M) legs."""
+    """(N, N) cheapest leg between each pair of targets (zero diagonal), (N, M) cheapest
+    leg from each configuration to each target (``cheapest[b, r]``: from configuration r
+    to any of target b's; :class:`ConfiguredData`'s ``cheapest`` for symmetric legs) and
+    the largest leg, one pass over the (M, M) legs."""
     n = offsets.shape[0] - 1
     dist = np.full((n, n), np.inf)
+    cheapest = np.empty((n, legs.shape[0]))
     top = 0.0
     for a in range(n):
         for r in range(offsets[a], offsets[a + 1]):
             for b in range(n):
-                best = dist[a, b]
+                best = np.inf
                 for c in range(offsets[b], offsets[b + 1]):
                     v = legs[r, c]
                     if v < best:
                         best = v
                     if v > top:
                         top = v
-                dist[a, b] = best
+                cheapest[b, r] = best
+                if best < dist[a, b]:
+                    dist[a, b] = best
         dist[a, a] = 0.0
-    return dist, top
+    return dist, cheapest, top
 
 
 @njit(cache=True, inline="always")
@@ -223,6 +234,8 @@ def relocate_pass(ext, data, configs, home):
     n_targets = m - 1 if home >= 0 else m
     off = data.offsets
     near = data.near
+    cheapest = data.cheapest
+    tight = cheapest.shape[0] > 0
     pos = np.empty(m, dtype=np.int64)
     for i in range(m):
         pos[ext[i]] = i
@@ -258,8 +271,12 @@ def relocate_pass(ext, data, configs, home):
                 cb = configs[b] if b != home else 0
                 base = _leg(data, a, ca, b, cb, home) + removed
                 # a lower bound from the cheapest legs skips most places unread
-                bound = ((data.dist[a, v] if a != home else 0.0)
-                         + (data.dist[v, b] if b != home else 0.0))
+                if tight:
+                    bound = ((cheapest[v, off[a] + ca] if a != home else 0.0)
+                             + (cheapest[v, off[b] + cb] if b != home else 0.0))
+                else:
+                    bound = ((data.dist[a, v] if a != home else 0.0)
+                             + (data.dist[v, b] if b != home else 0.0))
                 if bound - base >= best:
                     continue
                 # symmetric legs: both legs read along a row (leg v -> b = leg b -> v)

@@ -116,7 +116,8 @@ def pack_data(branch_times: Any, neighbours: int = 8) -> tuple[ConfiguredData, f
     legs = t.reshape(2 * n, 2 * n)
     data = pack_layers(legs, np.arange(0, 2 * n + 1, 2), penalty=penalty)
     if n > 1 and np.array_equal(data.legs, data.legs.T):
-        data = data._replace(near=neighbour_table(data.dist, neighbours))
+        data = data._replace(near=neighbour_table(data.dist, neighbours),
+                             cheapest=np.minimum.reduceat(data.legs, data.offsets[:-1], axis=0))
     return data, penalty
 
 

@@ -118,6 +118,9 @@ class SerialProblem:
     # the legs it finds in collision in place and restores them before it returns, under
     # ``_lock``
     _legs_memory: np.ndarray = field(init=False, repr=False)
+    # cheapest leg between each target and each configuration (ConfiguredData.cheapest),
+    # writable like ``_legs_memory`` for the same reason
+    _cheapest: np.ndarray = field(init=False, repr=False)
     _lock: threading.Lock = field(init=False, repr=False, default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
@@ -197,15 +200,15 @@ class SerialProblem:
         legs = memory.view()
         home_out = trapezoid_leg_times(home, flat, self.limits)[0]
         home_in = home_out.copy()  # the trapezoid time is the same either way
-        dist, top = _gc.block_minima(memory, offsets)
+        dist, cheapest, top = _gc.block_minima(memory, offsets)
         penalty = (len(configs) + 2) * max(float(top), float(home_out.max())) + 1.0
         cpu["matrix"] += time.process_time() - t0
         for name, value in (("configurations", tuple(configs)), ("offsets", offsets),
                             ("flat", flat), ("legs", legs), ("dist", dist),
                             ("penalty", penalty), ("home_out", home_out),
-                            ("home_in", home_in), ("cpu", cpu),
+                            ("home_in", home_in), ("cpu", cpu), ("_cheapest", cheapest),
                             ("dropped_in_collision", dropped), ("_legs_memory", memory)):
-            if isinstance(value, np.ndarray) and value is not memory:
+            if isinstance(value, np.ndarray) and value is not memory and value is not cheapest:
                 value.setflags(write=False)
             object.__setattr__(self, name, value)
 
@@ -394,7 +397,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     # the legs are symmetric, so the search uses neighbour lists over targets + home
     data = _gc.ConfiguredData(problem.dist.copy(), off, problem._legs_memory,
                               problem.home_out.copy(), problem.home_in.copy(), float(search),
-                              _near(problem, params.neighbours))
+                              _near(problem, params.neighbours), problem._cheapest)
     owner = np.repeat(np.arange(n), np.diff(off))
     genes = np.zeros(n, dtype=np.int64)
     aux = None

@@ -157,10 +157,12 @@ def _closed_tour_cost(tour, data, configs) -> float:
     return float(sum(data.legs[a, b] for a, b in zip(flat, flat[1:] + flat[:1], strict=True)))
 
 
+@pytest.mark.parametrize("tight", [True, False])
 @pytest.mark.parametrize("home", [True, False])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int,
-                                                                      home: bool) -> None:
+def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int, home: bool,
+                                                                      tight: bool) -> None:
+    # tight: the bound from each configuration's cheapest leg to a target (serial arms)
     rng = np.random.default_rng(seed)
     n = 8
     _, offsets, legs, home_out, home_in = _random_instance(rng, n, 3)
@@ -171,6 +173,8 @@ def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int
         data = pack_layers(legs, offsets)
         data = data._replace(near=neighbour_table(data.dist))
         cost_of, nodes, home_node = _closed_tour_cost, n, -1
+    if tight:
+        data = data._replace(cheapest=gc.block_minima(data.legs, data.offsets)[1])
     counts = np.diff(offsets)
     configs = np.array([rng.integers(0, k) for k in counts], dtype=np.int64)
     ext = rng.permutation(nodes).astype(np.int64)
@@ -242,11 +246,12 @@ def test_block_minima_and_square_legs_match_numpy() -> None:
     square = trapezoid_square(flat, lim)
     assert np.array_equal(square, trapezoid_leg_times(flat, flat, lim))
     assert np.array_equal(square, square.T)
-    dist, top = gc.block_minima(legs, offsets)
+    dist, cheapest, top = gc.block_minima(legs, offsets)
     expected = np.minimum.reduceat(np.minimum.reduceat(legs, offsets[:-1], axis=0),
                                    offsets[:-1], axis=1)
     np.fill_diagonal(expected, 0.0)
     assert np.array_equal(dist, expected)
+    assert np.array_equal(cheapest, np.minimum.reduceat(legs, offsets[:-1], axis=1).T)
     assert top == legs.max()
 
 
