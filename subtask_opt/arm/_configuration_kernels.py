@@ -440,8 +440,8 @@ def configuration_kick_count(kicks):
     260 joint-model runs, two 6, at about 1.5x the time), at most
     :data:`CONFIGURATION_KICKS_MAX`. Each runs a local search of the whole tour: N/5 of
     them per child made 200 elbow-choosing subtasks take 17-41 s of CPU and 500 about
-    6 minutes; 16 took 8-12 s and 14 s, with answers within the spread of the seeds
-    (3 seeds on 6 planar sets of 100-200 subtasks, one on 500)."""
+    6 minutes; 16 took 8-12 s and 12-30 s, with answers within the spread of the seeds
+    (benchmarks/elbows.py: 3 seeds on sets of 100, 200 and 500 subtasks, both planar arms)."""
     return min(2 * kicks, CONFIGURATION_KICKS_MAX)
 
 
