@@ -99,6 +99,20 @@ def compiling(group: str, what: str) -> Iterator[None]:
     mark_warm(group)
 
 
+@contextmanager
+def compile_seconds() -> Iterator[list[float]]:
+    """Seconds numba spends compiling (or loading compiled code) inside the block: the
+    yielded list receives that one number when the block ends, so a phase's CPU time
+    can be reported without the first run's compilation."""
+    from numba.core import event
+
+    listener = event.TimingListener()
+    spent: list[float] = []
+    with event.install_listener("numba:compile", listener):
+        yield spent
+    spent.append(listener.duration if listener.done else 0.0)
+
+
 def clear() -> Path:
     """Remove every cached generation; return the folder that was cleared."""
     root = cache_root()

@@ -47,3 +47,18 @@ def test_warm_markers(tmp_path, monkeypatch, group):
     assert not _kernel_cache.is_warm(group)
     _kernel_cache.mark_warm(group)
     assert _kernel_cache.is_warm(group)
+
+
+def test_compile_seconds_counts_compilation_only() -> None:
+    from numba import njit
+
+    @njit  # not cached: compiled inside the block
+    def twice(x):
+        return 2 * x
+
+    with _kernel_cache.compile_seconds() as compiled:
+        assert twice(3) == 6
+    assert compiled[0] > 0.0
+    with _kernel_cache.compile_seconds() as again:
+        assert twice(4) == 8  # already compiled
+    assert again == [0.0]

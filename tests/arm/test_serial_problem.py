@@ -231,3 +231,10 @@ def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> N
         [(qa, qb) for qa in a for qb in b]))
     with pytest.raises(NoPathError, match="still in the best tour after 1 searches"):
         solve_serial(blocked, seed=0)
+
+
+def test_cpu_split_reports_compilation_apart(solved) -> None:
+    # every phase is timed; numba's compile (or cache load) is its own entry, not search
+    _, result = solved
+    assert set(result.cpu) == {"ik", "collision", "matrix", "search", "compile"}
+    assert all(v >= 0.0 for v in result.cpu.values())

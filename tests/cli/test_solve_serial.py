@@ -46,7 +46,7 @@ def test_documented_command_writes_json_and_trajectory(files, capsys) -> None:
     assert doc["total_time"] == pytest.approx(sum(doc["leg_times"]))
     assert doc["trajectory"]["valid"] is True
     assert doc["collision_checked"] is True
-    assert set(doc["cpu_s"]) == {"ik", "collision", "matrix", "search"}
+    assert set(doc["cpu_s"]) == {"ik", "collision", "matrix", "search", "compile"}
     header = out_csv.read_text().splitlines()[0]
     assert header == "t,q1,q2,q3,q4,q5,q6,dq1,dq2,dq3,dq4,dq5,dq6,x,y,z"
     last_t = float(out_csv.read_text().splitlines()[-1].split(",")[0])
