@@ -67,10 +67,15 @@ def main() -> None:
                         help="multiply the default stall by this")
     parser.add_argument("--json", type=Path, help="write the rows here")
     args = parser.parse_args()
-    sizes = [int(s) for s in args.sizes.split(",")]
-    sets = [int(s) for s in args.sets.split(",")]
-    if args.seeds < 1 or args.stall_factor <= 0 or min(sizes) < 3:
-        parser.error("--seeds >= 1, --stall-factor > 0 and sizes >= 3")
+    try:
+        sizes = [int(s) for s in args.sizes.split(",")]
+        sets = [int(s) for s in args.sets.split(",")]
+    except ValueError:
+        parser.error(f"--sizes and --sets take comma-separated integers, got {args.sizes!r} "
+                     f"and {args.sets!r}")
+    if args.seeds < 1 or not 0 < args.stall_factor <= 100 or min(sizes) < 3 or min(sets) < 0:
+        parser.error(f"need --seeds >= 1 (got {args.seeds}), --stall-factor in (0, 100] (got "
+                     f"{args.stall_factor}), sizes >= 3 and set seeds >= 0")
     print(f"load average {os.getloadavg()[0]:.1f}; CPU times after JIT warm-up")
     rows = run(sizes, sets, args.seeds, args.stall_factor)
     if args.json:
