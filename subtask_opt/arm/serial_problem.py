@@ -66,7 +66,6 @@ MAX_CONFIGURATIONS = 20_000
 """Most configurations (over all targets) a problem may hold: the leg matrix is M x M."""
 
 
-
 @contextmanager
 def _phase(cpu: dict[str, float], key: str) -> Iterator[None]:
     """The block's CPU time into ``cpu[key]``, numba's compilation in it into
@@ -78,6 +77,7 @@ def _phase(cpu: dict[str, float], key: str) -> Iterator[None]:
     spent = min(compiled[0], total)
     cpu[key] += total - spent
     cpu["compile"] += spent
+
 
 @dataclass(frozen=True, eq=False)
 class SerialProblem:
