@@ -89,6 +89,10 @@ MAX_VERTICES = _max_vertices()
 (:func:`planner_memory_bytes`) fits in :data:`MEMORY_LIMIT_BYTES` (1831). MAKLINK
 takes minutes at that size (9-15 s for 600 vertices, growing about as V^2.5)."""
 
+MAX_COORDINATE = 1e9
+"""Largest |x| or |y| a world accepts (metres or cells): products of coordinates
+(areas, cross products) must stay far from overflow."""
+
 MAX_FILE_BYTES = 8 * 1024 * 1024
 """Largest world JSON file read (8 MiB; MAX_VERTICES vertices take well under 1 MiB)."""
 
@@ -578,6 +582,9 @@ def _parse_bounds(bounds: Any) -> tuple[float, float, float, float]:
     if any(v is None for v in b):
         raise InputDataError("PolygonWorld.bounds must be four finite numbers xmin, ymin, xmax, "
                              f"ymax, got {_short(bounds)}")
+    if any(abs(v) > MAX_COORDINATE for v in b):  # type: ignore[arg-type]
+        raise InputDataError(f"PolygonWorld.bounds must lie within +-{MAX_COORDINATE:g}, "
+                             f"got {list(b)}")
     if not (b[0] < b[2] and b[1] < b[3]):  # type: ignore[operator]
         raise InputDataError(
             f"PolygonWorld.bounds must have xmin < xmax and ymin < ymax, got {list(b)}")
@@ -627,6 +634,9 @@ def _parse_polygon(i: int, poly: Any, eps: float) -> np.ndarray:
             f"obstacle {i} must be a (k, 2) list of [x, y] vertices, got shape {p.shape}")
     if not np.all(np.isfinite(p)):
         raise InputDataError(f"obstacle {i} has a non-finite coordinate")
+    if np.abs(p).max(initial=0.0) > MAX_COORDINATE:
+        raise InputDataError(f"obstacle {i} has a coordinate beyond +-{MAX_COORDINATE:g}: "
+                             f"{np.abs(p).max():g}")
     if len(p) >= 2 and np.allclose(p[0], p[-1], rtol=0.0, atol=eps):
         p = p[:-1]  # an explicitly closed ring
     if len(p) < 3:

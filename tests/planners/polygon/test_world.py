@@ -179,6 +179,9 @@ SQUARE = [[1, 1], [2, 1], [2, 2], [1, 2]]
     ((0, 0, 3, 3), ([1, 2, 3],), "obstacle 0 vertex 0 must be a pair"),
     ((0, 0, 3, 3), ("abc",), "obstacle 0 must be a list"),
     (("0", 0, 3, 3), (), "four finite numbers"),
+    # finite but so large that an area overflows: refused, not a RuntimeWarning
+    ((0, 0, 3, 3), ([[1, 1], [2e200, 1], [2, 2e200]],), r"obstacle 0 has a coordinate beyond"),
+    ((-1e300, 0, 3, 3), (), r"bounds must lie within \+-1e\+09"),
 ])
 def test_bad_worlds_raise(bounds, obstacles, match):
     with pytest.raises(InputDataError, match=match):
