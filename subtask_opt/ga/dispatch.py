@@ -1,7 +1,9 @@
 """The one composition root of the GA: chromosome kind -> its five operators.
 
-numba cannot cache a function that takes other numba functions as arguments
-across processes, so the loop (:func:`subtask_opt.ga.loop.evolve`) takes an
+numba compiles a function that takes other numba functions as arguments once per
+function object and cannot cache it across processes (only explicit first-class
+``FunctionType`` arguments can be cached, and they shorten the cold start little:
+CONTRIBUTING), so the loop (:func:`subtask_opt.ga.loop.evolve`) takes a
 kind *tag* instead (:func:`subtask_opt.ga.kinds.tag`), whose numba type
 differs per kind. The five functions below are resolved per kind *while numba compiles*
 (``numba.extending.overload``): the loop compiled for one kind contains that
