@@ -57,11 +57,11 @@ class ConfiguredData(NamedTuple):
             local search then uses the neighbour-list moves of
             :func:`subtask_opt.ga.permutation.local_search`, configuration-choosing
             relocations and kicks; empty (0, 0): the exact full-sweep search, any costs.
-        cheapest: with ``near``, (N, M): the cheapest leg between any configuration of
-            target v and configuration c, ``cheapest[v, c]``; the relocations' lower
-            bound, which skips most places unread when targets have many configurations
-            (legs blocked later only raise legs, so it stays a bound). Empty (0, 0): the
-            looser bound from ``dist``.
+        cheapest: (N, M), read with ``near`` only: the cheapest leg between any
+            configuration of target v and configuration c, ``cheapest[v, c]``; the
+            relocations' lower bound, which skips most places unread when targets have
+            many configurations (legs blocked later only raise legs, so it stays a
+            bound). Empty (0, 0): the looser bound from ``dist``.
     """
 
     dist: np.ndarray

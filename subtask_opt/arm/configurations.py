@@ -88,9 +88,11 @@ def pack_layers(legs: Any, offsets: Any, *, home_out: Any = None, home_in: Any =
     row_min = np.minimum.reduceat(safe, off[:-1], axis=0)
     dist = np.minimum.reduceat(row_min, off[:-1], axis=1)
     np.fill_diagonal(dist, 0.0)
+    # row_min[v, c]: the cheapest leg from any configuration of target v into c, which for
+    # symmetric legs (the only ones the relocations that read it see) is ``cheapest``
     return ConfiguredData(np.ascontiguousarray(dist), off, np.ascontiguousarray(safe),
                           np.ascontiguousarray(h_out), np.ascontiguousarray(h_in),
-                          float(search))
+                          float(search), cheapest=np.ascontiguousarray(row_min))
 
 
 def penalty_for_legs(legs: np.ndarray, n_targets: int) -> float:
@@ -116,8 +118,7 @@ def pack_data(branch_times: Any, neighbours: int = 8) -> tuple[ConfiguredData, f
     legs = t.reshape(2 * n, 2 * n)
     data = pack_layers(legs, np.arange(0, 2 * n + 1, 2), penalty=penalty)
     if n > 1 and np.array_equal(data.legs, data.legs.T):
-        data = data._replace(near=neighbour_table(data.dist, neighbours),
-                             cheapest=np.minimum.reduceat(data.legs, data.offsets[:-1], axis=0))
+        data = data._replace(near=neighbour_table(data.dist, neighbours))
     return data, penalty
 
 

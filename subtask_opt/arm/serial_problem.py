@@ -67,16 +67,25 @@ MAX_CONFIGURATIONS = 20_000
 
 
 @contextmanager
-def _phase(cpu: dict[str, float], key: str) -> Iterator[None]:
-    """The block's CPU time into ``cpu[key]``, numba's compilation in it into
-    ``cpu["compile"]`` (a first run's compile is not IK or matrix work)."""
+def _compile_apart(cpu: dict[str, float]) -> Iterator[list[float]]:
+    """numba's compilation inside the block into ``cpu["compile"]`` (a first run's
+    compile is not IK, matrix or search work); the yielded list receives those CPU
+    seconds, for the phase the block belongs to to leave out."""
     t0 = time.process_time()
+    spent: list[float] = []
     with compile_seconds() as compiled:
+        yield spent
+    spent.append(min(compiled[0], time.process_time() - t0))
+    cpu["compile"] += spent[0]
+
+
+@contextmanager
+def _phase(cpu: dict[str, float], key: str) -> Iterator[None]:
+    """The block's CPU time into ``cpu[key]``, its compilation apart (:func:`_compile_apart`)."""
+    t0 = time.process_time()
+    with _compile_apart(cpu) as compiled:
         yield
-    total = time.process_time() - t0
-    spent = min(compiled[0], total)
-    cpu[key] += total - spent
-    cpu["compile"] += spent
+    cpu[key] += time.process_time() - t0 - compiled[0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -444,13 +453,10 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                            neighbours=params.neighbours, search=search, kicks=kicks)
             criteria = as_criteria(stop, params.default_stop(n))
             ga_rounds += 1
-            t_ga = time.process_time()
-            with compile_seconds() as compiled:
+            with _compile_apart(cpu) as compiled:
                 outcome = run_ga(Kind.CONFIGURED_PERMUTATION, config, data, aux, max_genes=n,
                                  seed=seed, criteria=criteria)
-            compile_cpu = min(compiled[0], time.process_time() - t_ga)
-            t0 += compile_cpu  # reported apart, not as search
-            cpu["compile"] += compile_cpu
+            t0 += compiled[0]  # not search time
             genes = outcome.genes.astype(np.int64)
             generations += outcome.generations
             restarts += outcome.restarts

@@ -173,8 +173,8 @@ def test_relocate_pass_gain_is_real_and_leaves_no_improving_relocation(seed: int
         data = pack_layers(legs, offsets)
         data = data._replace(near=neighbour_table(data.dist))
         cost_of, nodes, home_node = _closed_tour_cost, n, -1
-    if tight:
-        data = data._replace(cheapest=gc.block_minima(data.legs, data.offsets)[1])
+    data = data._replace(cheapest=gc.block_minima(data.legs, data.offsets)[1] if tight
+                         else np.zeros((0, 0)))
     counts = np.diff(offsets)
     configs = np.array([rng.integers(0, k) for k in counts], dtype=np.int64)
     ext = rng.permutation(nodes).astype(np.int64)
