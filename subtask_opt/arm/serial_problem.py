@@ -348,7 +348,8 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
                  params: SolverParams | None = None, kicks: int | None = None) -> SerialResult:
     """Order the targets and pick one configuration each for minimum time, home to home.
 
-    The first round runs the micro-GA (``stop``; default ``params.default_stop(n)``).
+    The first round runs the micro-GA (``stop``; default ``params.default_stop(n)``;
+    ``params.runs`` independent runs, default one).
     When the answer uses a leg found in collision, that leg is blocked and the same order
     is decoded again and polished by the local search (a repair round: the blocked leg
     is usually replaced by another configuration of one of its targets), until a tour
@@ -455,7 +456,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
             ga_rounds += 1
             with _compile_apart(cpu) as compiled:
                 outcome = run_ga(Kind.CONFIGURED_PERMUTATION, config, data, aux, max_genes=n,
-                                 seed=seed, criteria=criteria)
+                                 seed=seed, criteria=criteria, runs=params.runs or 1)
             t0 += compiled[0]  # not search time
             genes = outcome.genes.astype(np.int64)
             generations += outcome.generations

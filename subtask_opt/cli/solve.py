@@ -20,6 +20,7 @@ from subtask_opt.cli._common import (
     float_in,
     floats,
     html_output,
+    int_in,
     json_output,
     non_negative_int,
     refuse_overwriting_inputs,
@@ -31,8 +32,15 @@ from subtask_opt.cli._common import (
 
 def register(root: argparse._SubParsersAction) -> None:
     """Add the ``solve`` command."""
-    from subtask_opt.arm.sequencing import CONFIGURATION_MODES, DEFAULT_TIME_MODEL, PRESETS
+    from subtask_opt.arm.sequencing import (
+        CONFIGURATION_MODES,
+        CONFIGURED_RUNS,
+        DEFAULT_TIME_MODEL,
+        PRESETS,
+    )
     from subtask_opt.arm.timing import TIME_MODELS
+    from subtask_opt.ga.loop import MAX_RUNS
+    from subtask_opt.ga.permutation import KICKS_FROM
 
     p = root.add_parser(
         "solve",
@@ -84,6 +92,10 @@ def register(root: argparse._SubParsersAction) -> None:
     p.add_argument("--preset", default="default", choices=PRESETS,
                    help="solver preset (default: micro-GA with local search)")
     p.add_argument("--seed", type=seed, default=0, help="solver seed in [0, 2**63) (default 0)")
+    p.add_argument("--runs", type=int_in(1, MAX_RUNS), default=None, metavar="N",
+                   help=f"independent GA runs, the best kept, N in [1, {MAX_RUNS}] (default "
+                        f"{CONFIGURED_RUNS} when a planar arm's elbows are chosen below "
+                        f"{KICKS_FROM} subtasks, else 1)")
     p.add_argument("--certify", action="store_true",
                    help="prove the answer optimal (a MILP for fixed configurations, a branch "
                         "and cut when the elbows are chosen), or report the remaining gap")
@@ -137,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     stop = stop_criteria(args)
-    params = SolverParams(preset=args.preset)
+    params = SolverParams(preset=args.preset, runs=args.runs)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
         stop = stop + params.default_stop(len(subtasks),
                                           configured=problem.optimizes_configurations)
@@ -311,7 +323,7 @@ def _run_serial(args: argparse.Namespace) -> int:
         axis_step=45.0 if args.axis_step is None else args.axis_step,
         tool_frame=args.tool_frame, limits=args.limits)
     stop = stop_criteria(args)
-    params = SolverParams(preset=args.preset)
+    params = SolverParams(preset=args.preset, runs=args.runs)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
         stop = stop + params.default_stop(problem.size)
     result = solve_serial(problem, seed=args.seed, stop=stop, params=params)

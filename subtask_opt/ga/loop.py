@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -31,6 +31,7 @@ from subtask_opt._kernel_cache import compiling
 from subtask_opt.base.errors import ParameterError, require_int
 from subtask_opt.base.results import History
 from subtask_opt.base.stop import (
+    MaxRuntime,
     Progress,
     StoppingCriterion,
     kernel_limits,
@@ -48,6 +49,8 @@ from subtask_opt.ga.permutation import copy_run
 
 # Layout of the int64 ``counters`` array (the loop's state between chunks).
 _GEN, _LAST_IMPROVE, _RESTARTS, _BEST_LEN = range(4)
+MAX_RUNS = 1000
+"""Most independent runs one :func:`run_ga` call makes."""
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,7 @@ class GAOutcome:
     runtime_s: float
     seed: int
     extra: dict = field(default_factory=dict)
+    runs: int = 1
 
 
 @njit(cache=True, inline="always")
@@ -418,6 +422,7 @@ def run_ga(
     seed: int,
     criteria: list[StoppingCriterion],
     on_chunk: Callable[[Progress], None] | None = None,
+    runs: int = 1,
 ) -> GAOutcome:
     """Run the GA until a stopping criterion holds (see :func:`run_in_chunks`).
 
@@ -425,10 +430,19 @@ def run_ga(
     seeded run stops at the same generation however it is chunked. The kernel
     is compiled (or loaded from the cache) before the clock starts, so
     ``runtime_s`` never includes compilation.
+
+    ``runs`` independent runs (the first from ``seed``, run r from the seed
+    sequence ``[seed, r]``), each from a fresh population until the criteria
+    hold; the best answer is kept. Generation-based criteria apply to each run;
+    a :class:`~subtask_opt.base.stop.MaxRuntime` budget and a reached target
+    end them all. The history runs on through the runs (a new run counts as a
+    restart), and so do ``generations`` and ``restarts``; ``GAOutcome.runs`` is how
+    many ran.
     """
     if ops.registered(kind) is None:
         raise ParameterError(f"run_ga: no operators are registered for {kind!r}")
     require_int("run_ga", "max_genes", max_genes, 1)
+    require_int("run_ga", "runs", runs, 1, MAX_RUNS)
     rng = np.random.default_rng(seed)
     # a kind's data and parameters may also be NamedTuples of arrays
     if isinstance(data, np.ndarray):
@@ -462,24 +476,55 @@ def run_ga(
         hist_restart.append(hr[:ran])
         return ran
 
-    run_in_chunks(run_chunk, lambda: _progress(counters, best_cost, start), criteria, on_chunk)
+    kept = np.zeros(max_genes, dtype=np.int64)  # the best of the runs so far
+    kept_len, kept_cost, initial_best = 0, math.inf, math.inf
+    generations = restarts = done = 0
+    run_starts = []  # generations before each run after the first
+
+    def report(p: Progress) -> None:  # progress counted through the runs
+        if on_chunk is not None:
+            on_chunk(replace(p, generation=generations + p.generation))
+
+    for run in range(runs):
+        if run > 0:
+            if kept_cost <= target or any(isinstance(c, MaxRuntime) and c(_progress(
+                    counters, best_cost, start)) for c in criteria):
+                break
+            rng = np.random.default_rng([seed, run])
+            counters[:] = 0  # a fresh population: the kernel initialises it
+            run_starts.append(generations)
+        run_in_chunks(run_chunk, lambda: _progress(counters, best_cost, start), criteria,
+                      report)
+        done += 1
+        if run == 0:
+            initial_best = float(best_cost[1])
+        generations += int(counters[_GEN])
+        restarts += int(counters[_RESTARTS])
+        if best_cost[0] < kept_cost:
+            kept_cost, kept_len = float(best_cost[0]), int(counters[_BEST_LEN])
+            kept[:kept_len] = best[:kept_len]
     runtime = time.perf_counter() - start
 
     restart_flags = np.concatenate(hist_restart) if hist_restart else np.zeros(0, np.int64)
+    for g in run_starts:  # a new run re-seeds the population after generation g
+        if g > 0 and not restart_flags[g - 1]:  # (unless the last one just had)
+            restart_flags[g - 1] = 1
+            restarts += 1
     history = History(
-        initial_best=float(best_cost[1]),
-        best_cost=np.concatenate(hist_best) if hist_best else np.zeros(0),
+        initial_best=initial_best,
+        best_cost=np.minimum.accumulate(np.concatenate(hist_best)) if hist_best else np.zeros(0),
         mean_cost=np.concatenate(hist_mean) if hist_mean else np.zeros(0),
         restarts=np.flatnonzero(restart_flags) + 1,
     )
     return GAOutcome(
-        genes=best[: counters[_BEST_LEN]].copy(),
-        cost=float(best_cost[0]),
-        generations=int(counters[_GEN]),
-        restarts=int(counters[_RESTARTS]),
+        genes=kept[:kept_len].copy(),
+        cost=kept_cost,
+        generations=generations,
+        restarts=restarts,
         history=history,
         runtime_s=runtime,
         seed=seed,
+        runs=done,
     )
 
 

@@ -18,7 +18,7 @@ from subtask_opt import (
     solve,
 )
 from subtask_opt.arm.exact import held_karp, milp_optimum
-from subtask_opt.arm.sequencing import proven_configured_optimum
+from subtask_opt.arm.sequencing import CONFIGURED_RUNS, proven_configured_optimum
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
 from tests.conftest import size
@@ -100,13 +100,25 @@ def test_same_seed_same_result(arm):
         assert (a.generations, a.restarts) == (b.generations, b.restarts)
 
 
-def test_choosing_configurations_doubles_the_default_stall(arm):
+def test_choosing_configurations_makes_several_shorter_runs(arm):
     problem = SequencingProblem(builtin_case("random30", arm, seed=2), arm)
     assert problem.optimizes_configurations  # the default joint model chooses the elbows
-    r = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0))  # no bound stop
     fixed_stall = SolverParams().default_stop(30)[0]
-    assert isinstance(fixed_stall, NoImprovement)
-    assert r.generations - r.history.generation_of_best() == 2 * fixed_stall.generations
+    stall = SolverParams().default_stop(30, configured=True)[0]
+    assert isinstance(fixed_stall, NoImprovement) and isinstance(stall, NoImprovement)
+    assert stall.generations == 2 * fixed_stall.generations // 3
+    assert SolverParams().default_runs(30, configured=True) == CONFIGURED_RUNS > 1
+    assert SolverParams().default_runs(30) == 1
+    assert SolverParams(runs=3).default_runs(30, configured=True) == 3
+    one = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0, runs=1))
+    assert one.generations - one.history.generation_of_best() == stall.generations
+    several = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0))
+    # the first run is the same one: more runs can only find a shorter tour
+    assert several.total_time <= one.total_time
+    assert several.history.best_cost[one.generations - 1] == one.history.best_cost[-1]
+    assert several.generations >= CONFIGURED_RUNS * (stall.generations + 1)
+    assert (one.runs, several.runs) == (1, CONFIGURED_RUNS)
+    assert several.to_dict()["runs"] == CONFIGURED_RUNS
     # from 100 nodes on every child carries kicks of its own: the stall stays
     assert SolverParams().default_stop(200, configured=True) == SolverParams().default_stop(200)
 
@@ -147,6 +159,8 @@ def test_bad_solve_arguments_are_rejected(kwargs, match):
     ({"preset": "fast"}, "preset"), ({"population": 2}, "population"),
     ({"grasp_share": 2.0}, "grasp_share"), ({"max_segment": 0}, "max_segment"),
     ({"neighbours": 0}, "neighbours"), ({"convergence_tol": -1.0}, "convergence_tol"),
+    ({"runs": 0}, "runs"), ({"runs": 1001}, "runs"), ({"runs": True}, "runs"),
+    ({"runs": 2.0}, "runs"),
 ])
 def test_bad_solver_params_name_the_field(kwargs, field):
     with pytest.raises(ParameterError, match=field):

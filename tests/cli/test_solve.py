@@ -42,6 +42,15 @@ def test_solve_reads_a_csv_case_and_honours_stopping_options(tmp_path, capsys):
     assert "7 generations" in capsys.readouterr().out
 
 
+def test_solve_makes_the_runs_asked_for(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    assert main(["solve", "--case", "square20", "--runs", "3", "--max-generations", "4",
+                 "--quiet", "--json", str(out)]) == 0
+    assert "12 generations, " in capsys.readouterr().out
+    data = json.loads(out.read_text())
+    assert data["runs"] == 3 and data["generations"] == 12
+
+
 @pytest.mark.parametrize(("argv", "needle"), [
     (["solve", "--case", "nowhere.csv"], "nowhere.csv"),
     (["solve", "--case", "square20", "--robot", "r2d2"], "r2d2"),
@@ -49,6 +58,8 @@ def test_solve_reads_a_csv_case_and_honours_stopping_options(tmp_path, capsys):
     (["solve", "--case", "square20", "--seed", "-3"], "-3"),
     (["solve", "--case", "square20", "--max-generations", "0"], "0"),
     (["solve", "--case", "square20", "--first", "99"], "99"),
+    (["solve", "--case", "square20", "--runs", "0"], "--runs"),
+    (["solve", "--case", "square20", "--runs", "1001"], "1001"),
     (["solve"], "--case"),
 ])
 def test_user_mistakes_print_one_line_and_exit_2(argv, needle, capsys):

@@ -18,11 +18,11 @@ def _matrix(seed: int = 0, n: int = 12) -> np.ndarray:
     return np.hypot(*(pts[:, None] - pts[None]).transpose(2, 0, 1))
 
 
-def _run(search=SEARCH_PAPER, seed=0, criteria=None, config=None, m=None):
+def _run(search=SEARCH_PAPER, seed=0, criteria=None, config=None, m=None, runs=1):
     m = _matrix() if m is None else m
     aux = make_aux(neighbour_table(m), nearest_fallback=search != SEARCH_PAPER, search=search)
     return run_ga(Kind.PERMUTATION, config or GAConfig(), m, aux, max_genes=m.shape[0], seed=seed,
-                  criteria=criteria or [MaxGenerations(150)])
+                  criteria=criteria or [MaxGenerations(150)], runs=runs)
 
 
 def test_same_seed_same_outcome():
@@ -88,3 +88,36 @@ def test_best_genes_cost_matches_reported_cost():
 def test_bad_config_is_rejected_with_the_field_name(kwargs, field):
     with pytest.raises(ParameterError, match=field):
         GAConfig(**kwargs)
+
+
+def test_independent_runs_keep_the_best_and_count_through():
+    one = _run(search=SEARCH_FAST, seed=4, criteria=[MaxGenerations(40)])
+    three = _run(search=SEARCH_FAST, seed=4, criteria=[MaxGenerations(40)], runs=3)
+    assert three.generations == three.history.generations == 3 * 40  # the limit is per run
+    # the first run is the single run; the later ones start afresh after generations 40, 80
+    np.testing.assert_array_equal(three.history.best_cost[:40], one.history.best_cost)
+    assert {40, 80} <= set(three.history.restarts.tolist())
+    assert three.restarts == len(three.history.restarts)
+    assert three.cost <= one.cost
+    assert np.all(np.diff(three.history.best_cost) <= 0)
+    assert three.history.best_cost[-1] == pytest.approx(three.cost)
+    m = _matrix()
+    assert m[three.genes, np.roll(three.genes, -1)].sum() == pytest.approx(three.cost)
+    again = _run(search=SEARCH_FAST, seed=4, criteria=[MaxGenerations(40)], runs=3)
+    np.testing.assert_array_equal(three.genes, again.genes)
+    np.testing.assert_array_equal(three.history.best_cost, again.history.best_cost)
+
+
+def test_a_time_budget_or_a_met_target_ends_every_run():
+    spent = _run(search=SEARCH_FAST, criteria=[MaxRuntime(1e-9), MaxGenerations(40)], runs=5)
+    assert spent.generations <= 1  # the budget went in the first chunk of the first run
+    first = _run(search=SEARCH_FAST, criteria=[MaxGenerations(40)])
+    met = _run(search=SEARCH_FAST, criteria=[TargetCost(first.cost * 1.5), MaxGenerations(40)],
+               runs=5)
+    assert met.generations <= 1 and met.restarts == 0
+
+
+@pytest.mark.parametrize("runs", [0, 1001, 2.0, True])
+def test_bad_run_counts_are_rejected(runs):
+    with pytest.raises(ParameterError, match="runs"):
+        _run(runs=runs)
