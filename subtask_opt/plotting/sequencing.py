@@ -377,7 +377,8 @@ def plot_convergence(result: Result, *, ax: Axes | None = None,
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel("tour time - final best [s]")
     ax.set_title(f"convergence to {final:.4f} s ({result.preset} preset)\n"
-                 f"{result.generations} generations, {result.restarts} restarts", fontsize=10)
+                 f"{result.generations} generations, {result.restarts} restarts"
+                 + (f" in {result.runs} runs" if result.runs > 1 else ""), fontsize=10)
     ax.legend(fontsize=7.5)
     return ax
 
