@@ -116,7 +116,7 @@ def test_choosing_configurations_makes_several_shorter_runs(arm):
     # the first run is the same one: more runs can only find a shorter tour
     assert several.total_time <= one.total_time
     assert several.history.best_cost[one.generations - 1] == one.history.best_cost[-1]
-    assert several.generations >= CONFIGURED_RUNS * (stall.generations + 1)
+    assert several.generations >= CONFIGURED_RUNS * stall.generations  # each run stalls
     assert (one.runs, several.runs) == (1, CONFIGURED_RUNS)
     assert several.to_dict()["runs"] == CONFIGURED_RUNS
     # from 100 nodes on every child carries kicks of its own: the stall stays
