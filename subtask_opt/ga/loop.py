@@ -478,7 +478,7 @@ def run_ga(
 
     kept = np.zeros(max_genes, dtype=np.int64)  # the best of the runs so far
     kept_len, kept_cost, initial_best = 0, math.inf, math.inf
-    generations = restarts = done = 0
+    generations = restarts = 0
     run_starts = []  # generations before each run after the first
 
     def report(p: Progress) -> None:  # progress counted through the runs
@@ -495,7 +495,6 @@ def run_ga(
             run_starts.append(generations)
         run_in_chunks(run_chunk, lambda: _progress(counters, best_cost, start), criteria,
                       report)
-        done += 1
         if run == 0:
             initial_best = float(best_cost[1])
         generations += int(counters[_GEN])
@@ -524,7 +523,7 @@ def run_ga(
         history=history,
         runtime_s=runtime,
         seed=seed,
-        runs=done,
+        runs=len(run_starts) + 1,
     )
 
 
