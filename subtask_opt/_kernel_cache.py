@@ -24,6 +24,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import numba
+from numba.core import event
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 STALE_AFTER_S = 24 * 3600.0
@@ -76,24 +77,52 @@ def mark_warm(group: str) -> None:
 _announced = False
 
 
+def _announce(what: str) -> None:
+    """Say once per process, on stderr (also into logs and pipes: the wait that
+    follows can be a minute), that numba is compiling."""
+    global _announced
+    if not _announced:
+        _announced = True
+        print(f"subtask-opt: compiling {what} (numba; up to a minute, once: cached "
+              f"afterwards in {CACHE_DIR})", file=sys.stderr, flush=True)
+
+
+class _FirstCompileNotice(event.Listener):
+    """Announces the first kernel of the package that numba must compile rather than load,
+    so the notice comes with the first compilation whichever command or call starts it."""
+
+    def on_start(self, ev: event.Event) -> None:
+        if _announced:
+            return
+        dispatcher = (ev.data or {}).get("dispatcher")
+        module = getattr(getattr(dispatcher, "py_func", None), "__module__", None) or ""
+        if not module.startswith(f"{__package__}."):
+            return
+        try:  # numba has no public "is this cached": a missing index means a compile
+            index = dispatcher._cache._cache_file._index_path  # type: ignore[union-attr]
+        except AttributeError:
+            return
+        if not os.path.exists(index):
+            _announce("the kernels this run needs")
+
+    def on_end(self, ev: event.Event) -> None:
+        pass
+
+
 @contextmanager
 def compiling(group: str, what: str) -> Iterator[None]:
-    """Around the first call of a group of kernels: say once that numba is compiling.
+    """Around the first call of a group of kernels (``what``: how to name them).
 
-    When ``group`` is not yet in the cache and stderr is a terminal, one line goes
-    to stderr at once, then a ticking elapsed-time bar (logs and pipes stay clean,
-    so an error is still one line); the group is marked warm after.
+    When ``group`` is not yet in the cache, numba's compilation is announced once
+    per process (if :class:`_FirstCompileNotice` has not already), and on a terminal
+    a ticking elapsed-time bar follows. The group is marked warm after.
     """
-    global _announced
     if is_warm(group):
         yield
         return
     from subtask_opt.base.progress import elapsed_ticker
 
-    if not _announced and sys.stderr.isatty():
-        print(f"subtask-opt: compiling {what} once (numba; cached afterwards in {CACHE_DIR})",
-              file=sys.stderr, flush=True)
-        _announced = True
+    _announce(what)
     with elapsed_ticker(f"compiling {what}"):
         yield
     mark_warm(group)
@@ -104,8 +133,6 @@ def compile_seconds() -> Iterator[list[float]]:
     """Seconds numba spends compiling (or loading compiled code) inside the block: the
     yielded list receives that one number when the block ends, so a phase's CPU time
     can be reported without the first run's compilation."""
-    from numba.core import event
-
     listener = event.TimingListener()
     spent: list[float] = []
     with event.install_listener("numba:compile", listener):
@@ -136,6 +163,7 @@ def _activate() -> Path:
 
 
 CACHE_DIR = _activate()
+event.register("numba:compile", _FirstCompileNotice())
 
 if __name__ == "__main__":  # pragma: no cover - make clean
     if sys.argv[1:] == ["--clear"]:

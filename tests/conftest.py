@@ -16,12 +16,18 @@ from typing import TypeVar
 
 import pytest
 
+from subtask_opt import _kernel_cache
+
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 pytest_plugins = ["tests.fuzz_report"]  # counts a fuzz run's inputs when FUZZ_REPORT is set
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = PROJECT_ROOT.parent / "shared" / "data"
+
+# numba's once-per-process "compiling ..." notice (tests/test_kernel_cache.py tests it) goes
+# to stderr only while the cache is cold: keep it out of the other tests' stderr checks.
+_kernel_cache._announced = True
 
 REDUCED = os.environ.get("NUMBA_DISABLE_JIT", "0").strip() not in ("", "0")
 """True when the kernels run as plain Python (the coverage run): use the reduced sizes."""

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from subtask_opt import _kernel_cache
+from tests.conftest import PROJECT_ROOT, REDUCED
 
 
 def _tree(root: Path, body: str) -> None:
@@ -47,6 +51,48 @@ def test_warm_markers(tmp_path, monkeypatch, group):
     assert not _kernel_cache.is_warm(group)
     _kernel_cache.mark_warm(group)
     assert _kernel_cache.is_warm(group)
+
+
+def test_a_cold_group_is_announced_once_per_process_even_into_a_pipe(tmp_path, monkeypatch,
+                                                                     capsys):
+    monkeypatch.setattr(_kernel_cache, "CACHE_DIR", tmp_path)
+    monkeypatch.setattr(_kernel_cache, "_announced", False)
+    with _kernel_cache.compiling("first", "the first kernels"):
+        said = capsys.readouterr().err  # before the (long) block ends
+    assert said.count("\n") == 1 and "compiling the first kernels (numba" in said
+    assert str(tmp_path) in said and _kernel_cache.is_warm("first")
+    with _kernel_cache.compiling("second", "the second kernels"):
+        pass
+    assert capsys.readouterr().err == "" and _kernel_cache.is_warm("second")
+
+
+def test_a_warm_group_is_not_announced(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(_kernel_cache, "CACHE_DIR", tmp_path)
+    monkeypatch.setattr(_kernel_cache, "_announced", False)
+    _kernel_cache.mark_warm("done")
+    with _kernel_cache.compiling("done", "nothing"):
+        pass
+    assert capsys.readouterr().err == "" and not _kernel_cache._announced
+
+
+_FIRST_KERNEL = """
+import numpy as np
+from subtask_opt.arm import _kinematics_kernels as k
+from subtask_opt.arm.model import load_arm
+arm = load_arm("planar_2r")
+k.fk_batch(arm.kinematics, np.zeros((1, 2)))
+"""
+
+
+@pytest.mark.skipif(REDUCED, reason="NUMBA_DISABLE_JIT: nothing is compiled")
+def test_the_first_compiled_kernel_is_announced_and_a_cached_one_is_not(tmp_path):
+    env = dict(os.environ, SUBTASK_OPT_CACHE_DIR=str(tmp_path))
+    runs = [subprocess.run([sys.executable, "-c", _FIRST_KERNEL], env=env, capture_output=True,
+                           text=True, timeout=300, cwd=PROJECT_ROOT) for _ in range(2)]
+    assert [r.returncode for r in runs] == [0, 0], runs[0].stderr
+    cold, warm = (r.stderr for r in runs)
+    assert cold.count("\n") == 1 and "compiling the kernels this run needs (numba" in cold
+    assert warm == ""
 
 
 def test_compile_seconds_counts_compilation_only() -> None:
