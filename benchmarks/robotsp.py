@@ -9,7 +9,7 @@ path through the configurations in that order with the max-joint-difference
 metric weighted by 1/v_max, home to home), so the ratio can be measured.
 
     python benchmarks/robotsp.py [--sizes 25,50] [--seed 0] [--stall S] [--kicks K]
-                                 [--json out.json] [--stand-in]
+                                 [--runs R] [--json out.json] [--stand-in]
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt.arm.robotsp_bench import run, table
+from subtask_opt.base.errors import SubtaskOptError
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "robotsp"
 
@@ -83,6 +84,8 @@ def main() -> int:
                          "(default: SolverParams.default_stop)")
     ap.add_argument("--kicks", type=int, default=None,
                     help="kicks per child of our search (default: make_aux's)")
+    ap.add_argument("--runs", type=int, default=None,
+                    help="independent runs of our search, the best kept (default 1)")
     ap.add_argument("--json", default=None)
     ap.add_argument("--data", default=str(DATA))
     ap.add_argument("--stand-in", action="store_true",
@@ -90,8 +93,12 @@ def main() -> int:
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")] if args.sizes else None
     peers = {"robotsp": robotsp_stand_in} if args.stand_in else None
-    report = run(args.data, sizes=sizes, seed=args.seed, peer_functions=peers,
-                 stall=args.stall, kicks=args.kicks)
+    try:
+        report = run(args.data, sizes=sizes, seed=args.seed, peer_functions=peers,
+                     stall=args.stall, kicks=args.kicks, runs=args.runs)
+    except SubtaskOptError as exc:
+        print(f"robotsp.py: error: {exc}", file=sys.stderr)
+        return 2
     if args.stand_in:
         report["note"] = "robotsp column: the stand-in of benchmarks/robotsp.py"
     print(table(report))

@@ -78,12 +78,13 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
                peers: tuple[str, ...] = PEERS, validate_dt: float = 0.01,
                peer_functions: dict[str, Callable[..., Any]] | None = None,
                alternatives: bool | None = None, stall: int | None = None,
-               kicks: int | None = None) -> dict[str, Any]:
+               kicks: int | None = None, runs: int | None = None) -> dict[str, Any]:
     """Every method on one subset; a JSON-ready dict of the figures.
 
-    ``stall`` and ``kicks`` set our search (:func:`~subtask_opt.arm.serial_problem.solve_serial`:
-    stop after ``stall`` generations without improvement, ``kicks`` per child); None: its
-    defaults.
+    ``stall``, ``kicks`` and ``runs`` set our search
+    (:func:`~subtask_opt.arm.serial_problem.solve_serial`: stop after ``stall`` generations
+    without improvement, ``kicks`` per child, the best of ``runs`` independent runs); None:
+    its defaults.
 
     ``alternatives``: add the +-2 pi alternatives of joints 4 and 6 (whose ranges
     exceed 2 pi) as configurations of their own (about 3x as many); None: up to
@@ -94,6 +95,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import make_targets
     from subtask_opt.arm.scene import Scene
+    from subtask_opt.arm.sequencing import SolverParams
     from subtask_opt.arm.serial import load_serial_arm
     from subtask_opt.arm.serial_problem import (
         MAX_KICKS,
@@ -109,6 +111,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
         stop = [NoImprovement(stall), MaxGenerations(50_000)]
     if kicks is not None:
         require_int("run_subset", "kicks", kicks, 0, MAX_KICKS)
+    params = SolverParams(runs=runs)
     arm = load_serial_arm("vs060_drill", limits="robotsp")
     scene = Scene.load(data_dir / "obstacles.json")
     targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
@@ -133,7 +136,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             "cpu_s": cpu,
             "cpu_total_s": float(sum(v for k, v in cpu.items() if k != "compile"))}
 
-    ours = solve_serial(problem, seed=seed, stop=stop, kicks=kicks)
+    ours = solve_serial(problem, seed=seed, stop=stop, kicks=kicks, params=params)
     record("ours", ours, dict(ours.cpu))
     out["methods"]["ours"]["counts"] = ours.counts
     out["methods"]["ours"]["legs_in_collision"] = evaluate_tour(
@@ -176,21 +179,23 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
 def run(data_dir: str | Path, *, sizes: list[int] | None = None, seed: int = 0,
         peers: tuple[str, ...] = PEERS,
         peer_functions: dict[str, Callable[..., Any]] | None = None,
-        stall: int | None = None, kicks: int | None = None) -> dict[str, Any]:
-    """The benchmark over RoboTSP's subsets (``sizes``: which, default all); ``stall`` and
-    ``kicks`` as in :func:`run_subset`."""
+        stall: int | None = None, kicks: int | None = None,
+        runs: int | None = None) -> dict[str, Any]:
+    """The benchmark over RoboTSP's subsets (``sizes``: which, default all); ``stall``,
+    ``kicks`` and ``runs`` as in :func:`run_subset`."""
     data_dir = Path(data_dir)
     rows, subsets, published = _load(data_dir)
     chosen = sizes or [int(k) for k in subsets]
     report: dict[str, Any] = {"robot": "vs060_drill (frames reconstructed from RoboTSP's files)",
-                              "seed": seed, "stall": stall, "kicks": kicks, "subsets": {}}
+                              "seed": seed, "stall": stall, "kicks": kicks, "runs": runs,
+                              "subsets": {}}
     for size in chosen:
         if str(size) not in subsets:
             raise InputDataError(f"no subset of {size} holes; have {sorted(subsets)}")
         report["subsets"][str(size)] = run_subset(rows, subsets[str(size)], data_dir=data_dir,
                                                   seed=seed, peers=peers,
                                                   peer_functions=peer_functions,
-                                                  stall=stall, kicks=kicks)
+                                                  stall=stall, kicks=kicks, runs=runs)
     report["published"] = {m: dict(zip(published["number_of_targets"], v, strict=False))
                            for m, v in published.get("execution_time_s", {}).items()}
     return report
@@ -198,7 +203,7 @@ def run(data_dir: str | Path, *, sizes: list[int] | None = None, seed: int = 0,
 
 def table(report: dict[str, Any]) -> str:
     """The report as text: one row per subset and method."""
-    search = ", ".join(f"{k} {report[k]}" for k in ("stall", "kicks")
+    search = ", ".join(f"{k} {report[k]}" for k in ("stall", "kicks", "runs")
                        if report.get(k) is not None) or "default search"
     lines = [f"RoboTSP drilling benchmark on {report['robot']}, seed {report['seed']}, "
              f"{search}",

@@ -30,3 +30,14 @@ def test_robotsp_25_holes_valid_and_beats_the_stand_in() -> None:
     assert methods["ours"]["valid"], methods["ours"]["violations"]
     assert methods["ours"]["legs_in_collision"] == 0
     assert methods["ours"]["executed_time_s"] < methods["robotsp"]["executed_time_s"]
+
+
+@pytest.mark.parametrize(("option", "value"), [("runs", 0), ("runs", 1001), ("kicks", -1)])
+def test_bad_search_settings_are_refused_before_any_work(tmp_path, option, value) -> None:
+    import numpy as np
+
+    from subtask_opt.arm.robotsp_bench import run_subset
+    from subtask_opt.base.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=rf"{option} must be an integer in .*got {value}"):
+        run_subset(np.zeros((0, 6)), [], data_dir=tmp_path, **{option: value})
