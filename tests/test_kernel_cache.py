@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numba
 import pytest
 
 from subtask_opt import _kernel_cache
@@ -76,11 +77,27 @@ def test_a_warm_group_is_not_announced(tmp_path, monkeypatch, capsys):
 
 
 _FIRST_KERNEL = """
-import numpy as np
+import numba, numpy as np
+from numba.core import event
 from subtask_opt.arm import _kinematics_kernels as k
 from subtask_opt.arm.model import load_arm
+
+levels = {}
+class Levels(event.Listener):  # registered after the package's own listener
+    def on_start(self, ev):
+        levels[ev.data["dispatcher"].py_func.__name__] = int(numba.config.OPT)
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Levels())
+
+@numba.njit
+def users_own(x):
+    return x + 1
+
 arm = load_arm("planar_2r")
 k.fk_batch(arm.kinematics, np.zeros((1, 2)))
+users_own(1)
+print(levels.get("fk_batch"), levels.get("users_own"), int(numba.config.OPT))
 """
 
 
@@ -93,6 +110,40 @@ def test_the_first_compiled_kernel_is_announced_and_a_cached_one_is_not(tmp_path
     cold, warm = (r.stderr for r in runs)
     assert cold.count("\n") == 1 and "compiling the kernels this run needs (numba" in cold
     assert warm == ""
+    # the package's kernel at its own level, the user's and numba's setting at numba's
+    default = str(int(numba.config.OPT))
+    assert runs[0].stdout.split() == [str(_kernel_cache.KERNEL_OPT), default, default]
+
+
+class _Dispatcher:
+    def __init__(self, module: str) -> None:
+        self.py_func = type("F", (), {"__module__": module})()
+
+
+def test_the_package_level_holds_only_while_its_own_kernels_compile(monkeypatch) -> None:
+    from numba.core import event
+
+    monkeypatch.setattr(numba.config, "OPT", type(numba.config.OPT)(3))
+    listener = _kernel_cache._PackageCompiles()
+
+    def start(module: str) -> None:
+        listener.on_start(event.Event("numba:compile", event.EventStatus.START,
+                                      data={"dispatcher": _Dispatcher(module)}))
+
+    def end() -> None:
+        listener.on_end(event.Event("numba:compile", event.EventStatus.END))
+
+    start("users.code")
+    assert numba.config.OPT == 3
+    start("subtask_opt.ga.loop")  # one of ours, called from the user's kernel
+    assert numba.config.OPT == _kernel_cache.KERNEL_OPT
+    start("numba.np.arrayobj")  # numba's own helpers inside ours follow ours
+    assert numba.config.OPT == _kernel_cache.KERNEL_OPT
+    end()
+    end()
+    assert numba.config.OPT == 3
+    end()
+    assert numba.config.OPT == 3 and numba.config.OPT.is_opt_max is False
 
 
 def test_compile_seconds_counts_compilation_only() -> None:
