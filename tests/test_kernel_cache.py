@@ -102,7 +102,7 @@ print(levels.get("fk_batch"), levels.get("users_own"), int(numba.config.OPT))
 
 
 @pytest.mark.skipif(REDUCED, reason="NUMBA_DISABLE_JIT: nothing is compiled")
-def test_the_first_compiled_kernel_is_announced_and_a_cached_one_is_not(tmp_path):
+def test_the_first_compiled_kernel_is_announced_and_built_at_the_package_level(tmp_path):
     env = dict(os.environ, SUBTASK_OPT_CACHE_DIR=str(tmp_path))
     runs = [subprocess.run([sys.executable, "-c", _FIRST_KERNEL], env=env, capture_output=True,
                            text=True, timeout=300, cwd=PROJECT_ROOT) for _ in range(2)]
