@@ -34,11 +34,9 @@ _PREFIX = "kernels-"
 KERNEL_OPT = 1
 """LLVM optimisation level of the package's kernels (numba's default, ``NUMBA_OPT``, is 3).
 
-Measured on this project's kernels (2026-12-01, answers identical): the elbow-choosing
-search runs 1.65x faster at 1 than at 3 or 2 (random30: 338 vs 568 ms; a 60-subtask
-set: 5.2 vs 8.5 s), the serial-arm search 1.2x faster, the TSP and polygon planners
-alike, the grid GA 8% slower, and a cold start is 15% shorter. Set only while numba
-compiles one of the package's kernels; a user's own kernels keep their level."""
+Level 1 runs the elbow-choosing search 1.65x faster than 3 and compiles 15% quicker, with
+identical answers (measured in CONTRIBUTING, "Numba's cache and the cold start"). Set only
+while numba compiles one of the package's kernels; a user's own kernels keep their level."""
 
 
 def cache_root() -> Path:
