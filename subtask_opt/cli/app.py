@@ -8,6 +8,7 @@ handlers, so ``--help`` is instant. A user mistake prints one line and exits 2.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from collections.abc import Sequence
@@ -64,6 +65,15 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _discard_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's last flush of a closed
+    pipe does not fail once more on exit."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):  # no file descriptor (a captured stdout)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the process exit code (see :data:`EPILOG`)."""
     parser = build_parser()
@@ -79,6 +89,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SubtaskOptError as exc:
         print(f"subtask-opt: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except BrokenPipeError:  # whoever read stdout left early (`| head`): not bad input
+        _discard_stdout()
+        print("subtask-opt: failed: standard output was closed before the run finished",
+              file=sys.stderr)
+        return EXIT_FAILED
     except OSError as exc:  # unreadable input, unwritable output
         name = getattr(exc, "filename", None)
         what = f"{exc.strerror or exc}: {name}" if name else str(exc)

@@ -157,3 +157,22 @@ def test_python_dash_m_runs_the_same_cli(tmp_path) -> None:
                          capture_output=True, text=True, timeout=600)
     assert bad.returncode == 2
     assert len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_a_closed_standard_output_is_a_failed_run_in_one_line() -> None:
+    """``subtask-opt ... | head`` whose reader leaves before the output ends: exit 1 with one
+    line, not 2 (bad input) and no second error from the interpreter's last flush."""
+    import os
+    import subprocess
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # nobody will read: the first print fails
+    proc = subprocess.run([sys.executable, "-m", "subtask_opt.cli", "plan", "grid", "--map",
+                           "fig2.4", "--start", "2,7", "--goal", "12,1", "--planner", "dt"],
+                          stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=600)
+    os.close(write_end)
+    err = proc.stderr.splitlines()
+    assert proc.returncode == 1, proc.stderr
+    assert err[-1] == "subtask-opt: failed: standard output was closed before the run finished"
+    assert not any("Exception ignored" in line or "Traceback" in line for line in err)
