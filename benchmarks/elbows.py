@@ -22,7 +22,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from subtask_opt import SequencingProblem, SolverParams, load_arm, solve
+from subtask_opt import SolverParams, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.stop import MaxGenerations, NoImprovement
 
@@ -32,10 +34,10 @@ ROBOTS = ("planar_2r", "asr_twodof")
 def run(sizes: list[int], sets: list[int], seeds: int, stall_factor: float) -> list[dict[str, Any]]:
     rows = []
     for robot in ROBOTS:
-        arm = load_arm(robot)
+        arm = load_planar_arm(robot)
         for n in sizes:
             for set_seed in sets:
-                problem = SequencingProblem(random_subtasks(arm, n, seed=set_seed), arm,
+                problem = PlanarProblem(random_subtasks(arm, n, seed=set_seed), arm,
                                             time_model="joint")
                 solve(problem, seed=0, stop=MaxGenerations(2))  # JIT warm-up
                 stall = SolverParams().default_stop(n, configured=True)[0]

@@ -35,7 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt import SequencingProblem, builtin_case, load_arm, solve
+from subtask_opt import builtin_case, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.trajectory import tour_trajectory, validate_trajectory
 from subtask_opt.base.progress import progress_bar
 
@@ -43,7 +45,7 @@ ROBOTS = ("planar_2r", "asr_twodof")
 MODELS = ("paper", "trapezoid", "line", "joint")
 
 
-def _tour_leg_share(problem: SequencingProblem, order: np.ndarray) -> tuple[float, float]:
+def _tour_leg_share(problem: PlanarProblem, order: np.ndarray) -> tuple[float, float]:
     """Shares of the tour's legs whose straight line is impossible / over a joint speed."""
     check = problem.timing.leg_check
     a, b = order, np.roll(order, -1)
@@ -57,7 +59,7 @@ def run_instance(robot: str, case: str, instance: int, seed: int, arm) -> list[d
     rows = []
     for model in MODELS:
         configurations = "optimize" if model in ("line", "joint") else "fixed"
-        problem = SequencingProblem(subtasks, arm, time_model=model,
+        problem = PlanarProblem(subtasks, arm, time_model=model,
                                     configurations=configurations)
         result = solve(problem, seed=seed)
         trajectory = tour_trajectory(problem, result)
@@ -149,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     jobs = [(robot, "square20", 0) for robot in ROBOTS] + [
         (robot, "random30", k) for robot in ROBOTS for k in range(args.instances)]
-    arms = {robot: load_arm(robot) for robot in ROBOTS}
+    arms = {robot: load_planar_arm(robot) for robot in ROBOTS}
     rows: list[dict] = []
     with progress_bar(True, total=len(jobs), desc="instances") as bar:
         for robot, case, instance in jobs:

@@ -6,7 +6,7 @@ offset of up to ``0.2 / sqrt(N)``, about a third of a typical tour edge, so the
 matrix is asymmetric and the solve takes its any-costs search) are solved
 with the default parameters and the default stop
 (:meth:`subtask_opt.SolverParams.default_stop`), one seed each. Printed per N:
-median wall time of ``SequencingProblem.from_matrix`` (matrix checks and the
+median wall time of ``MatrixProblem`` (matrix checks and the
 neighbour table, an O(N^2) argpartition), of ``solve`` and their sum, the
 median number of generations, the tour length over sqrt(N) (about 0.7124 for
 optimal tours of many uniform points, the Beardwood-Halton-Hammersley constant;
@@ -29,7 +29,8 @@ import time
 
 import numpy as np
 
-from subtask_opt import SequencingProblem, solve
+from subtask_opt import solve
+from subtask_opt.tour.problem import MatrixProblem
 
 
 def _instance(n: int, seed: int, asymmetric: bool = False) -> np.ndarray:
@@ -58,7 +59,7 @@ def main() -> None:
     args = parser.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
-    solve(SequencingProblem.from_matrix(_instance(20, 0, args.asymmetric)), seed=0)  # JIT warm-up
+    solve(MatrixProblem(_instance(20, 0, args.asymmetric)), seed=0)  # JIT warm-up
     print(f"{'N':>6} {'build s':>8} {'solve s':>8} {'total s':>8} {'gens':>6} "
           f"{'len/sqrtN':>9} {'gap to bound':>12}")
     builds, solves = [], []
@@ -67,7 +68,7 @@ def main() -> None:
         for seed in range(args.seeds):
             m = _instance(n, 1000 * n + seed, args.asymmetric)
             t0 = time.perf_counter()
-            problem = SequencingProblem.from_matrix(m)
+            problem = MatrixProblem(m)
             t1 = time.perf_counter()
             result = solve(problem, seed=seed)
             t2 = time.perf_counter()

@@ -14,7 +14,7 @@ model at fixed elbow-down configurations, a TSP):
 
 Each optimum is certified once, not taken from our runs: the TSP by the subtour-cut
 MILP (:func:`subtask_opt.milp_optimum`), the GTSP by the branch and cut of
-:func:`subtask_opt.arm.exact.gtsp_optimum` (one configuration per subtask,
+:func:`subtask_opt.tour.exact.gtsp_optimum` (one configuration per subtask,
 generalised cut constraints), both with HiGHS; a GTSP not proven within
 ``--gtsp-time-limit`` is judged against the best answer known (ours or elkai's) and
 flagged in the table. The default
@@ -23,7 +23,7 @@ within a relative 1e-9 of the optimum.
 
 elkai (LKH-3, its defaults: 10 runs) solves the same instances: the TSP matrix
 scaled to integers (the longest leg 1e5 units), and the GTSP through its Noon-Bean
-ATSP (:func:`subtask_opt.arm.peers.noon_bean_matrix`; one node per configuration
+ATSP (:func:`subtask_opt.tour.peers.noon_bean_matrix`; one node per configuration
 a subtask's branch reaches), its tour read back as an order and one configuration
 per subtask. An elkai answer hits when its true time is within a relative 1e-6 of
 the optimum (the integer rounding blurs finer differences).
@@ -48,23 +48,25 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt import SequencingProblem, builtin_case, load_arm, milp_optimum, solve
-from subtask_opt.arm.configurations import configuration_graph
-from subtask_opt.arm.exact import tour_length
-from subtask_opt.arm.peers import noon_bean_matrix
-from subtask_opt.arm.sequencing import proven_configured_optimum
+from subtask_opt import builtin_case, milp_optimum, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import SubtaskOptError
 from subtask_opt.base.progress import progress_bar
+from subtask_opt.tour.configurations import configuration_graph
+from subtask_opt.tour.exact import tour_length
+from subtask_opt.tour.peers import noon_bean_matrix
+from subtask_opt.tour.solve import proven_configured_optimum
 
 REL_TOL = 1e-9
 PEER_TOL = 1e-6
 
 
 def instances(arm_name: str, model: str, sets: int, set_seed: int
-              ) -> list[tuple[str, str, SequencingProblem]]:
+              ) -> list[tuple[str, str, PlanarProblem]]:
     """(family, name, problem) of every instance of one robot and time model."""
-    arm = load_arm(arm_name)
+    arm = load_planar_arm(arm_name)
     subtask_sets = [("square20", "square20", builtin_case("square20", arm))]
     subtask_sets += [("random30", f"random30/{g}", builtin_case("random30", arm, seed=g))
                      for g in range(10)]
@@ -73,21 +75,22 @@ def instances(arm_name: str, model: str, sets: int, set_seed: int
                           random_subtasks(arm, n, seed=set_seed + k))
                          for k in range(sets)]
     time_model, _, fixed = model.partition("-")
-    return [(family, name, SequencingProblem(sub, arm, time_model=time_model,
+    return [(family, name, PlanarProblem(sub, arm, time_model=time_model,
                                              configurations=fixed or None))
             for family, name, sub in subtask_sets]
 
 
-def _configuration_nodes(problem: SequencingProblem) -> tuple[np.ndarray, np.ndarray,
+def _configuration_nodes(problem: PlanarProblem) -> tuple[np.ndarray, np.ndarray,
                                                                 np.ndarray]:
     """(cost between configuration nodes, subtask of each node, branch of each node)."""
-    return configuration_graph(problem.timing.branch_times, problem.timing.branch_joints)
+    return configuration_graph(problem.timing.branch_times,
+                               np.isfinite(problem.timing.branch_joints).all(axis=2))
 
 
-def certify(problem: SequencingProblem, time_limit: float, order: np.ndarray) -> float | None:
+def certify(problem: PlanarProblem, time_limit: float, order: np.ndarray) -> float | None:
     """The certified optimum (None: the GTSP was not proven within ``time_limit``).
 
-    The GTSP goes to :func:`subtask_opt.arm.exact.gtsp_optimum` with the tour
+    The GTSP goes to :func:`subtask_opt.tour.exact.gtsp_optimum` with the tour
     ``order`` (at its best configurations) as the incumbent: it only lets branch and
     bound prune (and fix edges) from the start; the optimum returned is proven
     either way, and is below the incumbent when there is a better tour.
@@ -103,7 +106,7 @@ def certify(problem: SequencingProblem, time_limit: float, order: np.ndarray) ->
         return None
 
 
-def run_ours(problem: SequencingProblem, seeds: int) -> dict:
+def run_ours(problem: PlanarProblem, seeds: int) -> dict:
     costs, walls, searches, generations, orders = [], [], [], [], []
     for seed in range(seeds):
         t = time.perf_counter()
@@ -123,7 +126,7 @@ def _elkai_tour(matrix: list[list[int]]) -> np.ndarray:
     return np.asarray(elkai.DistanceMatrix(matrix).solve_tsp()[:-1], dtype=np.int64)
 
 
-def run_elkai(problem: SequencingProblem, repeats: int) -> dict:
+def run_elkai(problem: PlanarProblem, repeats: int) -> dict:
     """elkai on the TSP matrix or on the GTSP's Noon-Bean ATSP (see the module doc)."""
     if problem.optimizes_configurations:
         cost, sub, _ = _configuration_nodes(problem)

@@ -30,7 +30,7 @@ the generation is the first generation whose best string is optimal.
     python benchmarks/paper_micro_ga.py --optima docs/figures/square20_optima.png
 
 ``--optima`` instead enumerates every optimal tour of square20 on the paper's
-time model (:func:`subtask_opt.arm.exact.optimal_tours`), once with planar_2r's
+time model (:func:`subtask_opt.tour.exact.optimal_tours`), once with planar_2r's
 limits and once with its rotation limits Kw and Kw_dot ten times larger (so
 that only the distance matters), prints the counts and plots the optimum of the
 first beside two optima of the second (the paper's Figs. 8 and 9).
@@ -47,11 +47,13 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt import SequencingProblem, SolverParams, builtin_case, load_arm, milp_optimum, solve
-from subtask_opt.arm.exact import optimal_tours
-from subtask_opt.arm.model import CartesianLimits
+from subtask_opt import SolverParams, builtin_case, milp_optimum, solve
+from subtask_opt.arm.model import CartesianLimits, load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.base.stop import MaxGenerations, TargetCost
 from subtask_opt.ga.config import GAConfig
+from subtask_opt.tour.exact import optimal_tours
+from subtask_opt.tour.problem import MatrixProblem
 
 # generation at which the paper reports the optimum (its Figs. 10 and 13)
 PAPER_GENERATIONS = {"square20": 500, "random30": 800}
@@ -117,16 +119,16 @@ def paper_instances(names: list[str], robot: str = "planar_2r") -> list[tuple[st
     random30 drawn with generator seed g; a ``+rot10`` suffix makes the rotation
     limits Kw and Kw_dot ten times larger (distance-dominated legs: square20 then
     has 14 optimal tours instead of one)."""
-    arm = load_arm(robot)
+    arm = load_planar_arm(robot)
     c = arm.cartesian_limits
-    free = load_arm(robot, cartesian_limits=CartesianLimits(c.kv, c.ka, 10 * c.kw,
+    free = load_planar_arm(robot, cartesian_limits=CartesianLimits(c.kv, c.ka, 10 * c.kw,
                                                             10 * c.kw_dot))
     out = []
     for name in names:
         base, plus, _ = name.partition("+rot10")
         family, _, gen = base.partition("/")
         sub = builtin_case(family, arm, seed=int(gen or 0))
-        out.append((name, SequencingProblem(sub, free if plus else arm,
+        out.append((name, PlanarProblem(sub, free if plus else arm,
                                             time_model="paper").matrix))
     return out
 
@@ -134,7 +136,7 @@ def paper_instances(names: list[str], robot: str = "planar_2r") -> list[tuple[st
 def run_reading(matrix: np.ndarray, optimum: float, loop: GAConfig, seeds: int,
                 max_generations: int) -> dict:
     """Success count and generations to the optimum of one reading on one matrix."""
-    problem = SequencingProblem.from_matrix(matrix)
+    problem = MatrixProblem(matrix)
     params = SolverParams(preset="paper", paper_loop=loop)
     stop = [TargetCost(optimum, tolerance=REL_TOL), MaxGenerations(max_generations)]
     gens, restarts, times = [], [], []
@@ -152,15 +154,15 @@ def square20_optima(path: Path) -> dict:
     """Enumerate square20's optimal tours on the paper's model and plot three of them."""
     from subtask_opt.plotting.sequencing import save_optimal_tours_figure
 
-    arm = load_arm("planar_2r")
+    arm = load_planar_arm("planar_2r")
     c = arm.cartesian_limits
-    free = load_arm("planar_2r", cartesian_limits=CartesianLimits(c.kv, c.ka, 10 * c.kw,
+    free = load_planar_arm("planar_2r", cartesian_limits=CartesianLimits(c.kv, c.ka, 10 * c.kw,
                                                                   10 * c.kw_dot))
     sub = builtin_case("square20", arm)
     out = {}
     panels = []
     for label, robot in (("planar_2r limits", arm), ("rotation limits x10", free)):
-        problem = SequencingProblem(sub, robot, time_model="paper")
+        problem = PlanarProblem(sub, robot, time_model="paper")
         found = optimal_tours(problem.matrix)
         out[label] = {"optimum": found.cost, "count": len(found.tours),
                       "next_cost": found.next_cost}
@@ -233,7 +235,7 @@ def main(argv: list[str] | None = None) -> dict:
     for name, matrix in paper_instances(args.instances):
         optimum, _ = milp_optimum(matrix)
         results["instances"][name] = {"optimum": optimum, "readings": {}}
-        solve(SequencingProblem.from_matrix(matrix), seed=0,  # compile before timing
+        solve(MatrixProblem(matrix), seed=0,  # compile before timing
               params=SolverParams(preset="paper"), stop=MaxGenerations(2))
         for reading in args.readings:
             t = time.perf_counter()

@@ -2,7 +2,7 @@
 
 Runs :func:`subtask_opt.arm.robotsp_bench.run` on ``../shared/data/robotsp``
 (every subset, or ``--sizes 25,50``) and prints the table. The peers come from
-``subtask_opt.arm.peers``; while that module is missing, ``--stand-in`` runs
+``subtask_opt.tour.peers``; while that module is missing, ``--stand-in`` runs
 a minimal re-implementation of RoboTSP's method written here (Euclidean 2-opt
 on the hole positions from a nearest-neighbour start, then a layered shortest
 path through the configurations in that order with the max-joint-difference
@@ -51,7 +51,7 @@ def _two_opt(points: np.ndarray) -> np.ndarray:
 
 
 def robotsp_stand_in(positions, layers, home, vmax, leg_time):  # noqa: ANN001, ANN201
-    """RoboTSP's method (stand-in; same contract as subtask_opt.arm.peers.robotsp_method)."""
+    """RoboTSP's method (stand-in; same contract as subtask_opt.tour.peers.robotsp_method)."""
     cycle = _two_opt(np.asarray(positions))
     # open the cycle next to home: start at the hole whose best configuration is nearest
     start_cost = [np.min(np.max(np.abs(layers[i] - home) / vmax, axis=1)) for i in cycle]
@@ -89,7 +89,7 @@ def main() -> int:
     ap.add_argument("--json", default=None)
     ap.add_argument("--data", default=str(DATA))
     ap.add_argument("--stand-in", action="store_true",
-                    help="use this script's RoboTSP method where subtask_opt.arm.peers lacks it")
+                    help="use this script's RoboTSP method where subtask_opt.tour.peers lacks it")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")] if args.sizes else None
     peers = {"robotsp": robotsp_stand_in} if args.stand_in else None

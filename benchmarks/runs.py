@@ -2,12 +2,12 @@
 
 On held-out instances (``benchmarks/heldout.py``'s, joint model, elbows chosen) whose
 optimum is certified first, one GA run (``runs=1``) per seed at a fraction of the stall a
-single run had before :data:`~subtask_opt.arm.sequencing.CONFIGURED_RUNS` (twice the
+single run had before :data:`~subtask_opt.arm.planar_problem.CONFIGURED_RUNS` (twice the
 fixed-configuration stall; today's runs stall a third of that); printed per instance and
 fraction: the share of runs that miss the optimum (q) and the median wall time of a run.
 Then, for k independent runs at each fraction, the expected misses over the instances x 20
 seeds (sum of 20 q^k) and the time relative to one run at the first fraction. This is the
-measurement behind :data:`~subtask_opt.arm.sequencing.CONFIGURED_RUNS`.
+measurement behind :data:`~subtask_opt.arm.planar_problem.CONFIGURED_RUNS`.
 
     python benchmarks/runs.py [--seeds 60] [--fractions 1,1/2,1/3]
         [--instances planar_2r:random60/5002,asr_twodof:random30/9,...] [--json out.json]

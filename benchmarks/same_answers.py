@@ -4,8 +4,15 @@
     python benchmarks/same_answers.py compare A B     # diff two recordings, timings ignored
 
 The command set covers every CLI command the README shows and every built-in case, map,
-world and scenario. Keys that hold wall-clock measurements (``runtime*``, ``*seconds``,
-``*_ms``, ``compile*``) are dropped before comparing; everything else must be equal.
+world and scenario, planar tour shapes (open paths, fixed ends, a home, precedence) and
+serial arms (a UR5 in its box cell, the VS060 on RoboTSP's drilling subset when
+``../shared/data`` is there). Keys that hold wall-clock measurements (``runtime*``,
+``*seconds``, ``*_ms``, ``compile*``, ``cpu*``) are dropped before comparing.
+
+Every command but a serial arm's must give equal values for every key the older recording
+has (keys added since are listed, not failed). A serial arm's answer must be equal *or
+better*: its executed ``total_time`` no longer than before (the search of serial arms is
+being reworked, so its tours may change).
 """
 
 from __future__ import annotations
@@ -23,7 +30,15 @@ REACTIVE_WORLDS = ("simple", "u-trap", "corridor")
 REACTIVE_NAVIGATORS = ("fuzzy", "vff", "vfh")
 AGV_SCENARIOS = ("1", "2-1", "2-2", "2-3")
 
-TIMING_KEY = re.compile(r"(runtime|seconds|_ms$|^ms$|^time_s$|compile|elapsed|wall)", re.IGNORECASE)
+TIMING_KEY = re.compile(r"(runtime|seconds|_ms$|^ms$|^time_s$|compile|elapsed|wall|^cpu)",
+                        re.IGNORECASE)
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+PRECEDENCE = HERE / "data" / "precedence.txt"
+UR5_CASE = ROOT / "examples" / "data" / "ur5_panel.csv"
+UR5_SCENE = ROOT / "examples" / "data" / "ur5_panel_scene.json"
+ROBOTSP = ROOT.parent / "shared" / "data" / "robotsp"
+SERIAL_PREFIX = "solve-serial-"
 
 
 def commands() -> dict[str, list[str]]:
@@ -38,6 +53,22 @@ def commands() -> dict[str, list[str]]:
     cmds["solve-paper-preset"] = ["solve", "--case", "square20", "--preset", "paper",
                                   "--time-model", "trapezoid", "--seed", "3",
                                   "--max-generations", "300"]
+    for model in ("joint", "trapezoid"):
+        base = ["solve", "--case", "random30", "--time-model", model, "--seed", "2"]
+        cmds[f"solve-open-{model}"] = [*base, "--tour", "open", "--first", "4"]
+        cmds[f"solve-open-end-{model}"] = [*base, "--tour", "open", "--first", "4", "--end", "9"]
+        cmds[f"solve-home-{model}"] = [*base, "--home", "0.3,0.3"]
+        cmds[f"solve-precedence-{model}"] = [*base, "--precedence", str(PRECEDENCE)]
+    ur5 = ["solve", "--robot", "ur5", "--case", str(UR5_CASE), "--scene", str(UR5_SCENE),
+           "--home", "0,-90,90,-90,-90,0"]
+    for seed in (0, 1, 2):
+        cmds[f"{SERIAL_PREFIX}ur5-{seed}"] = [*ur5, "--seed", str(seed)]
+    cmds[f"{SERIAL_PREFIX}ur5-noscene"] = ["solve", "--robot", "ur5", "--case", str(UR5_CASE),
+                                          "--home", "0,-90,90,-90,-90,0", "--seed", "0"]
+    if ROBOTSP.is_dir():
+        cmds[f"{SERIAL_PREFIX}vs060-robotsp"] = [
+            "solve", "--robot", "vs060_drill", "--case",
+            str(ROBOTSP / "targets.csv"), "--seed", "0", "--quiet"]
     for name in GRID_MAPS:
         for planner in GRID_PLANNERS:
             cmds[f"grid-{name}-{planner}"] = ["plan", "grid", "--map", name,
@@ -86,6 +117,7 @@ def record(out: Path, only: str | None = None) -> int:
 
 
 def compare(a: Path, b: Path) -> int:
+    """Compare recording ``b`` (after) with ``a`` (before); 1 when an answer got worse."""
     differing = 0
     names = sorted({p.name for p in a.glob("*.json")} | {p.name for p in b.glob("*.json")})
     for name in names:
@@ -95,10 +127,20 @@ def compare(a: Path, b: Path) -> int:
             differing += 1
             continue
         ja, jb = _strip(json.loads(pa.read_text())), _strip(json.loads(pb.read_text()))
-        if ja != jb:
+        if name.startswith(SERIAL_PREFIX):
+            before, after = float(ja["total_time"]), float(jb["total_time"])
+            verdict = "equal" if after == before else ("better" if after < before else "WORSE")
+            print(f"{name}: {verdict} ({before:.6f} -> {after:.6f} s)")
+            differing += verdict == "WORSE"
+            continue
+        changed = sorted(k for k in ja if k not in jb or ja[k] != jb[k])
+        added = sorted(k for k in jb if k not in ja) if isinstance(jb, dict) else []
+        if changed:
             differing += 1
-            print(f"{name}: differs")
-    print(f"{len(names) - differing} of {len(names)} identical (timings excluded)")
+            print(f"{name}: differs in {', '.join(changed)}")
+        elif added:
+            print(f"{name}: identical; keys added: {', '.join(added)}")
+    print(f"{len(names) - differing} of {len(names)} identical or better (timings excluded)")
     return 1 if differing else 0
 
 

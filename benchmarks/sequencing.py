@@ -2,7 +2,7 @@
 
 Instances: square20 and random30 from 10 generator seeds (robot and time
 model selectable). Each instance's optimum is certified by an exact MILP with
-subtour cuts (HiGHS, :func:`subtask_opt.arm.exact.milp_optimum`), not taken from
+subtour cuts (HiGHS, :func:`subtask_opt.tour.exact.milp_optimum`), not taken from
 our own runs. Both presets solve every instance from ``--seeds`` seeds; the
 peers OR-Tools (guided local search) and elkai (LKH-3) solve the same
 matrices in the same run when installed (``pip install -e '.[bench]'``).
@@ -30,18 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt import (
-    SequencingProblem,
-    SolverParams,
-    builtin_case,
-    load_arm,
-    milp_optimum,
-    solve,
-)
-from subtask_opt.arm.exact import tour_length
+from subtask_opt import SolverParams, builtin_case, milp_optimum, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.base.progress import progress_bar
 from subtask_opt.batch import map_jobs
 from subtask_opt.cli._common import add_workers, where_text, workers_options
+from subtask_opt.tour.exact import tour_length
+from subtask_opt.tour.problem import MatrixProblem
 
 # generation at which the paper reports the optimum (its Figs. 10 and 13)
 PAPER_GENERATIONS = {"square20": 500, "random30": 800}
@@ -49,20 +45,20 @@ REL_TOL = 1e-9
 
 
 def instances(robot: str, time_model: str) -> list[tuple[str, str, np.ndarray]]:
-    arm = load_arm(robot)
-    out = [("square20", "square20", SequencingProblem(builtin_case("square20", arm), arm,
+    arm = load_planar_arm(robot)
+    out = [("square20", "square20", PlanarProblem(builtin_case("square20", arm), arm,
                                                       time_model=time_model).matrix)]
     for g in range(10):
         sub = builtin_case("random30", arm, seed=g)
         out.append(("random30", f"random30/{g}",
-                    SequencingProblem(sub, arm, time_model=time_model).matrix))
+                    PlanarProblem(sub, arm, time_model=time_model).matrix))
     return out
 
 
 def _solve_one(job: tuple[np.ndarray, str, int]) -> tuple[float, int, float]:
     """One solve (in a worker): total time, generation of the best tour, search time."""
     matrix, preset, seed = job
-    r = solve(SequencingProblem.from_matrix(matrix), seed=seed,
+    r = solve(MatrixProblem(matrix), seed=seed,
               params=SolverParams(preset=preset))
     return float(r.total_time), int(r.history.generation_of_best()), float(r.runtime_s)
 
@@ -194,7 +190,7 @@ def main() -> None:
     compile_s = {}
     for preset in ("default", "paper"):  # first calls compile (or load the numba cache)
         t = time.perf_counter()
-        solve(SequencingProblem.from_matrix(cases[0][2]), seed=0,
+        solve(MatrixProblem(cases[0][2]), seed=0,
               params=SolverParams(preset=preset))
         compile_s[preset] = time.perf_counter() - t
 

@@ -2,17 +2,17 @@
 
 Part 1, solvers: every instance in ``../shared/data/tsplib`` listed in its
 ``optima.json``. Rows: our micro-GA (``subtask_opt.solve`` over
-``SequencingProblem.from_matrix``) at its default stop and with a time limit
+``MatrixProblem``) at its default stop and with a time limit
 (``--limit``, default 1 s) on ``--seeds`` seeds; fast_tsp
 (``fast_tsp.find_tour(matrix, limit)``), elkai/LKH (``solve_tsp()``, one run,
 no time limit) and OR-Tools guided local search (same limit; in a child process,
 because it and highspy bundle clashing HiGHS builds). Cells: median gap to
 the published optimum and median wall time. The wall time of ours includes
-``from_matrix`` (matrix checks), whose time is also shown apart, and the
+``MatrixProblem`` (matrix checks), whose time is also shown apart, and the
 candidate lists that ``solve`` builds before its clock (and so ``--limit``)
 starts: alpha-nearness from 100 cities, about 0.07 s of CPU at pr1002.
 
-Part 2, the Held-Karp bound (:func:`subtask_opt.arm.bound.lower_bound`):
+Part 2, the Held-Karp bound (:func:`subtask_opt.tour.bound.lower_bound`):
 its time at N = 30, 100, 300, 1000 (uniform random points), its gap
 ``(opt - bound) / opt`` on random 30-point Euclidean instances with optima
 certified by MILP (median, max), and on the TSPLIB instances.
@@ -38,12 +38,13 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt import MaxRuntime, SequencingProblem, SolverParams, milp_optimum, solve
-from subtask_opt.arm.bound import lower_bound
-from subtask_opt.arm.tsplib import read_tsplib
+from subtask_opt import MaxRuntime, SolverParams, milp_optimum, solve
 from subtask_opt.base.stop import StoppingCriterion
 from subtask_opt.batch import map_jobs
 from subtask_opt.cli._common import add_workers, where_text, workers_options
+from subtask_opt.tour.bound import lower_bound
+from subtask_opt.tour.problem import MatrixProblem
+from subtask_opt.tour.tsplib import read_tsplib
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tsplib"
 
@@ -64,7 +65,7 @@ def _solve_one(job: tuple[np.ndarray, int, int, float | None]) -> tuple[float, f
     matrix, optimum, seed, limit = job
     params = SolverParams()
     t0 = time.perf_counter()
-    problem = SequencingProblem.from_matrix(matrix)
+    problem = MatrixProblem(matrix)
     t1 = time.perf_counter()
     stop: list[StoppingCriterion] = (params.default_stop() if limit is None
                                      else [MaxRuntime(limit)])
@@ -76,7 +77,7 @@ def _solve_one(job: tuple[np.ndarray, int, int, float | None]) -> tuple[float, f
 def _warm() -> None:
     """The GA's kernels loaded once per worker, before its first timed solve."""
     warm = np.random.default_rng(0).random((12, 12)) + 1
-    solve(SequencingProblem.from_matrix(warm + warm.T), seed=0)
+    solve(MatrixProblem(warm + warm.T), seed=0)
 
 
 def run_ours(instances: list[tuple[np.ndarray, int]], seeds: int, limit: float | None,
@@ -209,7 +210,7 @@ def main() -> None:
     t = time.perf_counter()
     warm = np.random.default_rng(0).random((12, 12)) + 1
     warm = warm + warm.T
-    solve(SequencingProblem.from_matrix(warm), seed=0)
+    solve(MatrixProblem(warm), seed=0)
     lower_bound(warm)
     print(f"JIT warm-up (compile or cache load): {time.perf_counter() - t:.1f} s")
 

@@ -1,34 +1,34 @@
 """subtask_opt: minimum-time subtask sequencing for a robot arm, and mobile-robot planners.
 
-The sequencing API::
+One API for every arm, a planar 2R arm or any serial chain (UR, Panda, VS060, a URDF)::
 
-    from subtask_opt import load_arm, builtin_case, SequencingProblem, solve
-    arm = load_arm("planar_2r")
-    problem = SequencingProblem(builtin_case("random30", arm, seed=0), arm)
-    result = solve(problem, seed=1)
-    print(result.summary())
+    import subtask_opt as so
+    robot = so.load_robot("ur5")                         # or "planar_2r", or a URDF path
+    targets = so.load_targets("holes.csv", standoff=0.01)
+    problem = so.ArmProblem(targets, robot, scene="cell.json",
+                            home=[0, -1.57, 1.57, -1.57, -1.57, 0])
+    result = so.solve(problem, seed=0, constraints=so.TourConstraints(tour="open"))
+    print(result.summary()); traj = so.trajectory(result); print(so.validate(traj))
 
-Planners live in :mod:`subtask_opt.planners`; figures in :mod:`subtask_opt.plotting`.
+Robot-free tours (a cost matrix, a clustered cost tensor, TSPLIB) live in
+:mod:`subtask_opt.tour` and take the same :func:`solve`; planners live in
+:mod:`subtask_opt.planners`; figures in :mod:`subtask_opt.plotting`.
 """
 
 from subtask_opt import _kernel_cache  # noqa: F401  (first: selects numba's cache folder)
-from subtask_opt.arm.configurations import best_configurations
-from subtask_opt.arm.constraints import TourConstraints
-from subtask_opt.arm.exact import exact_constrained, held_karp, milp_optimum
-from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
-from subtask_opt.arm.report import TourReport
-from subtask_opt.arm.sequencing import (
-    DEFAULT_TIME_MODEL,
-    PRESETS,
-    MatrixProblem,
-    Result,
-    SequencingProblem,
-    SolverParams,
+from subtask_opt.arm.planar_problem import DEFAULT_TIME_MODEL
+from subtask_opt.arm.problem import (
+    ArmProblem,
+    Robot,
+    load_robot,
+    load_targets,
     solve,
+    trajectory,
+    validate,
 )
-from subtask_opt.arm.tasks import CASE_NAMES, SubtaskSet, builtin_case, load_subtasks, save_subtasks
-from subtask_opt.arm.timing.models import TIME_MODELS, LegCheck, TimingResult, travel_times
-from subtask_opt.arm.trajectory import TourTrajectory, tour_trajectory, validate_trajectory
+from subtask_opt.arm.report import TourReport
+from subtask_opt.arm.tasks import CASE_NAMES, SubtaskSet, builtin_case, save_subtasks
+from subtask_opt.arm.timing.models import TIME_MODELS
 from subtask_opt.base.errors import (
     InputDataError,
     NoPathError,
@@ -38,17 +38,19 @@ from subtask_opt.base.errors import (
 )
 from subtask_opt.base.results import History, PlanResult
 from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
+from subtask_opt.tour.constraints import TourConstraints
+from subtask_opt.tour.exact import exact_constrained, held_karp, milp_optimum
+from subtask_opt.tour.problem import ClusteredProblem, MatrixProblem
+from subtask_opt.tour.solve import PRESETS, Result, SolverParams
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Arm", "CartesianLimits", "JointLimits", "load_arm", "ROBOT_NAMES",
-    "SubtaskSet", "builtin_case", "load_subtasks", "save_subtasks", "CASE_NAMES",
-    "TIME_MODELS", "LegCheck", "TimingResult", "travel_times",
-    "SequencingProblem", "MatrixProblem", "SolverParams", "Result", "TourReport", "solve",
-    "PRESETS", "DEFAULT_TIME_MODEL",
-    "best_configurations", "TourTrajectory", "tour_trajectory", "validate_trajectory",
-    "held_karp", "milp_optimum", "TourConstraints", "exact_constrained",
+    "load_robot", "Robot", "load_targets", "ArmProblem", "solve", "Result", "trajectory",
+    "validate", "TourConstraints", "SolverParams", "PRESETS", "DEFAULT_TIME_MODEL",
+    "TIME_MODELS", "TourReport",
+    "SubtaskSet", "builtin_case", "save_subtasks", "CASE_NAMES",
+    "MatrixProblem", "ClusteredProblem", "held_karp", "milp_optimum", "exact_constrained",
     "MaxGenerations", "MaxRuntime", "NoImprovement", "TargetCost",
     "History", "PlanResult",
     "SubtaskOptError", "ParameterError", "InputDataError", "UnreachableError", "NoPathError",

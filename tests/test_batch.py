@@ -16,8 +16,9 @@ import sys
 import numpy as np
 import pytest
 
-from subtask_opt import SequencingProblem, load_arm, solve
-from subtask_opt.arm.sequencing import MatrixProblem
+from subtask_opt import solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import builtin_case, load_subtasks, random_subtasks, save_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.base.stop import MaxGenerations, NoImprovement
@@ -31,6 +32,7 @@ from subtask_opt.batch import (
     solve_many,
 )
 from subtask_opt.batch.pool import chunk_size, dask_available, job_indices
+from subtask_opt.tour.problem import MatrixProblem
 
 STOP = [NoImprovement(10), MaxGenerations(400)]
 N_JOBS = 50
@@ -39,7 +41,7 @@ BAD = 17  # the job whose subtasks the arm cannot reach
 
 @pytest.fixture(scope="module")
 def arm():
-    return load_arm("planar_2r")
+    return load_planar_arm("planar_2r")
 
 
 @pytest.fixture(scope="module")
@@ -56,9 +58,9 @@ def batch(arm, tmp_path_factory):
             path.write_text("x,y\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in far))
             items.append(Job(f"part{i}", str(path), time_model="trapezoid"))
         elif i % 5 == 0:
-            items.append(SequencingProblem(sub, arm, time_model="trapezoid"))
+            items.append(PlanarProblem(sub, arm, time_model="trapezoid"))
         elif i == 49:
-            items.append(MatrixProblem(SequencingProblem(sub, arm, time_model="trapezoid").matrix))
+            items.append(MatrixProblem(PlanarProblem(sub, arm, time_model="trapezoid").matrix))
         elif i % 5 == 1:
             path = folder / f"part{i}.json"
             save_subtasks(sub, path)
@@ -75,7 +77,7 @@ def _problem_of(item, arm):
     if not isinstance(item, Job):
         return item
     subtasks = load_subtasks(item.case) if not item.builtin else builtin_case(item.case, arm)
-    return SequencingProblem(subtasks, arm, time_model=item.time_model)
+    return PlanarProblem(subtasks, arm, time_model=item.time_model)
 
 
 @pytest.fixture(scope="module")
@@ -171,7 +173,7 @@ def test_scheduler_address_without_dask_says_what_to_install(batch, monkeypatch)
 def test_killed_worker_jobs_are_rerun_and_the_batch_completes(arm, client):
     import psutil
 
-    problems = [SequencingProblem(random_subtasks(arm, 16, seed=500 + i), arm,
+    problems = [PlanarProblem(random_subtasks(arm, 16, seed=500 + i), arm,
                                   time_model="trapezoid") for i in range(N_JOBS)]
     seeds = list(range(N_JOBS))
     stop = [NoImprovement(30), MaxGenerations(2000)]
@@ -212,7 +214,7 @@ def test_a_job_whose_file_cannot_be_read_fails_alone(tmp_path, arm):
     assert [r.success for r in results] == [True, False, False, True]
     assert "nope.csv" in results[1].error and results[1].error.startswith("InputDataError")
     assert "duplicate" in results[2].error
-    want = solve(SequencingProblem(builtin_case("square20", arm), arm, time_model="trapezoid"),
+    want = solve(PlanarProblem(builtin_case("square20", arm), arm, time_model="trapezoid"),
                  seed=0, stop=STOP)
     assert results[3].total_time == want.total_time
 
@@ -221,7 +223,7 @@ def test_seeds_none_uses_each_jobs_seed_and_an_int_overrides_all(tmp_path, arm):
     path = tmp_path / "p.csv"
     sub = random_subtasks(arm, 9, seed=4)
     save_subtasks(sub, path)
-    problem = SequencingProblem(sub, arm, time_model="trapezoid")
+    problem = PlanarProblem(sub, arm, time_model="trapezoid")
     jobs = [Job(f"s{s}", str(path), time_model="trapezoid", seed=s) for s in (1, 2)]
     own = solve_many(jobs, seeds=None, stop=[MaxGenerations(2)], workers=0)
     assert [r.seed for r in own] == [1, 2]

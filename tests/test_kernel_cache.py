@@ -80,7 +80,7 @@ _FIRST_KERNEL = """
 import numba, numpy as np
 from numba.core import event
 from subtask_opt.arm import _kinematics_kernels as k
-from subtask_opt.arm.model import load_arm
+from subtask_opt.arm.model import load_planar_arm
 
 levels = {}
 class Levels(event.Listener):  # registered after the package's own listener
@@ -94,7 +94,7 @@ event.register("numba:compile", Levels())
 def users_own(x):
     return x + 1
 
-arm = load_arm("planar_2r")
+arm = load_planar_arm("planar_2r")
 k.fk_batch(arm.kinematics, np.zeros((1, 2)))
 users_own(1)
 print(levels.get("fk_batch"), levels.get("users_own"), int(numba.config.OPT))

@@ -8,7 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from subtask_opt import SequencingProblem, load_arm, load_subtasks, solve
+from subtask_opt import solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
+from subtask_opt.arm.tasks import load_subtasks
 from subtask_opt.cli import main
 
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -35,8 +38,8 @@ def test_api_and_cli_defaults_give_the_same_total_time(tmp_path, capsys):
     out = tmp_path / "r.json"
     assert main(["solve", "--case", str(csv), "--json", str(out)]) == 0
     cli = json.loads(out.read_text())
-    arm = load_arm()
-    api = solve(SequencingProblem(load_subtasks(csv), arm))
+    arm = load_planar_arm()
+    api = solve(PlanarProblem(load_subtasks(csv), arm))
     assert cli["total_time"] == api.total_time
     assert cli["order"] == api.order.tolist()
     assert cli["report"]["time_model"] == api.report.time_model

@@ -19,7 +19,9 @@ matplotlib.use("Agg")
 
 import numpy as np  # noqa: E402
 
-from subtask_opt import SequencingProblem, builtin_case, load_arm, solve  # noqa: E402
+from subtask_opt import builtin_case, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem  # noqa: E402
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks  # noqa: E402
 from subtask_opt.plotting.sequencing import save_solution_figure  # noqa: E402
 
@@ -38,14 +40,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="solver seed (default 0)")
     args = parser.parse_args(argv)
     out = Path(args.out)
-    arm = load_arm("planar_2r")
+    arm = load_planar_arm("planar_2r")
     runs = [
         ("sequencing_25.png", grid_part(5), "line"),
         ("sequencing_random30.png", builtin_case("random30", arm, seed=0), "joint"),
         ("sequencing_100.png", random_subtasks(arm, 100, seed=1, name="random100"), "joint"),
     ]
     for name, subtasks, model in runs:
-        problem = SequencingProblem(subtasks, arm, time_model=model, configurations="optimize")
+        problem = PlanarProblem(subtasks, arm, time_model=model, configurations="optimize")
         result = solve(problem, seed=args.seed)
         path = save_solution_figure(result, problem, out / name)
         print(f"wrote {path}: {result.total_time:.3f} s, {result.generations} generations")

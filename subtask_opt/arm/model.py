@@ -99,7 +99,7 @@ class JointLimits:
 class Arm:
     """A planar 2R arm: Pinocchio model/data, its geometry and limits.
 
-    Build it with :func:`load_arm`. Attributes: ``name``, ``model``, ``data``
+    Build it with :func:`load_planar_arm`. Attributes: ``name``, ``model``, ``data``
     (scratch), ``tip_frame_id``, ``link_lengths`` (L1, L2), ``base_xy``,
     ``joint_limits``, ``cartesian_limits``, ``axis_signs`` (+1 if a joint turns
     counter-clockwise seen from +z), ``angle_offsets`` (geometric angles a1, a2 at
@@ -320,7 +320,7 @@ def _section(params: dict[str, Any], key: str, path: Path | None) -> dict[str, A
     return value
 
 
-def load_arm(name_or_path: str | Path = "planar_2r", *,
+def load_planar_arm(name_or_path: str | Path = "planar_2r", *,
              cartesian_limits: CartesianLimits | None = None,
              joint_limits: JointLimits | None = None,
              tip_frame: str | None = None) -> Arm:
@@ -406,5 +406,5 @@ def load_arm(name_or_path: str | Path = "planar_2r", *,
 
 
 __all__ = [
-    "Arm", "BRANCH_NAMES", "CartesianLimits", "JointLimits", "ROBOT_NAMES", "load_arm",
+    "Arm", "BRANCH_NAMES", "CartesianLimits", "JointLimits", "ROBOT_NAMES", "load_planar_arm",
 ]

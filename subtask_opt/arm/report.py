@@ -1,6 +1,6 @@
 """What a tour means for the arm: leg times, moves, configurations, legs it cannot drive.
 
-:func:`subtask_opt.solve` answers with search facts (:class:`~subtask_opt.arm.sequencing.Result`);
+:func:`subtask_opt.solve` answers with search facts (:class:`~subtask_opt.tour.solve.Result`);
 for an arm problem the result also carries a :class:`TourReport` built here, which
 describes only the tour that was returned: a Cartesian model's straight lines are
 checked for the tour's N legs only. All-pairs diagnostics of the time model (every
@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.sequencing import SequencingProblem
+    from subtask_opt.arm.planar_problem import PlanarProblem
 
 BRANCH_LETTERS = "du"  # elbow down, elbow up
 
@@ -51,6 +51,8 @@ class TourReport:
     configurations: np.ndarray
     legs: tuple[TourLeg, ...]
     diagnostics: dict[str, Any] = field(default_factory=dict)
+    problem: Any = field(default=None, repr=False, compare=False)
+    """The problem the tour belongs to (for :func:`subtask_opt.trajectory`)."""
 
     @property
     def leg_moves(self) -> tuple[str, ...]:
@@ -76,6 +78,18 @@ class TourReport:
                 "n_impossible": sum(leg.infeasible_line for leg in self.legs),
                 "n_overspeed": sum(leg.overspeed > 1.0 for leg in self.legs),
                 "worst_ratio": max((leg.overspeed for leg in self.legs), default=0.0)}
+
+    def header(self, n: int) -> str:
+        """The summary's first line for an answer of ``n`` subtasks."""
+        return f"{n} subtasks, {self.time_model} time model, robot {self.robot}"
+
+    def order_lines(self, order: np.ndarray) -> list[str]:
+        """The summary's lines after the order: the chosen elbows, when they were chosen."""
+        if self.configurations_mode != "optimize":
+            return []
+        c = self.configurations[order]
+        return ["elbow: " + " ".join("du"[int(b)] for b in c)
+                + f"  (d down, u up; {self.configuration_changes} changes)"]
 
     def warning(self) -> str | None:
         """One line when a Cartesian model's tour breaks the arm's joint limits."""
@@ -118,7 +132,7 @@ class TourReport:
         }
 
 
-def tour_report(problem: SequencingProblem, order: np.ndarray, configurations: np.ndarray,
+def tour_report(problem: PlanarProblem, order: np.ndarray, configurations: np.ndarray,
                 leg_times: np.ndarray) -> TourReport:
     """The report of the closed tour ``order`` at ``configurations`` (by subtask index)."""
     timing = problem.timing
@@ -162,4 +176,4 @@ def tour_report(problem: SequencingProblem, order: np.ndarray, configurations: n
     return TourReport(robot=problem.arm.name, time_model=problem.time_model,
                       configurations_mode=str(problem.configurations),
                       configurations=np.asarray(configurations, dtype=np.int64),
-                      legs=tuple(legs), diagnostics=diagnostics)
+                      legs=tuple(legs), diagnostics=diagnostics, problem=problem)

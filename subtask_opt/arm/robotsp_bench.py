@@ -6,14 +6,14 @@ configuration, a 0.01 m standoff and a 45 degree axis step, the panel and the
 pedestal boxes as the scene. One :class:`~subtask_opt.arm.serial_problem.SerialProblem`
 per subset (IK, collision filter, leg matrix) is shared by every method:
 
-* ``ours``: :func:`~subtask_opt.arm.serial_problem.solve_serial`;
+* ``ours``: :func:`~subtask_opt.arm.serial_problem.solve_serial_problem`;
 * ``robotsp``: RoboTSP's method (Euclidean TSP on the hole positions, then
   the best configurations through the layers in that order);
 * ``tsp_cspace``: the most manipulable configuration per hole, then a TSP in
   joint space;
 * ``elkai_gtsp``: LKH on the GTSP (Noon-Bean), a GLKH stand-in.
 
-The three peers come from :mod:`subtask_opt.arm.peers` (imported lazily; a
+The three peers come from :mod:`subtask_opt.tour.peers` (imported lazily; a
 missing module or function is reported, not faked). Every answer is executed
 with the same ruckig legs and validated
 (:func:`~subtask_opt.arm.serial_trajectory.validate_serial_trajectory`). Our
@@ -58,9 +58,9 @@ def _peer(name: str) -> Callable[..., Any] | str:
     try:
         from subtask_opt.arm import peers  # type: ignore[attr-defined]
     except ImportError as exc:
-        return f"subtask_opt.arm.peers not available ({exc})"
+        return f"subtask_opt.tour.peers not available ({exc})"
     fn = getattr(peers, {"robotsp": "robotsp_method"}.get(name, name), None)
-    return fn if callable(fn) else f"subtask_opt.arm.peers has no {name}"
+    return fn if callable(fn) else f"subtask_opt.tour.peers has no {name}"
 
 
 def _manipulability(arm: Any, layers: list[np.ndarray]) -> list[np.ndarray]:
@@ -82,7 +82,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     """Every method on one subset; a JSON-ready dict of the figures.
 
     ``stall``, ``kicks`` and ``runs`` set our search
-    (:func:`~subtask_opt.arm.serial_problem.solve_serial`: stop after ``stall`` generations
+    (:func:`~subtask_opt.arm.serial_problem.solve_serial_problem`: stop after ``stall`` generations
     without improvement, ``kicks`` per child, the best of ``runs`` independent runs); None:
     its defaults.
 
@@ -90,21 +90,21 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     exceed 2 pi) as configurations of their own (about 3x as many); None: up to
     :data:`ALTERNATIVES_MAX_HOLES` holes (the M x M leg matrix must fit in memory).
 
-    ``peer_functions`` replaces peers by name (same contract as :mod:`subtask_opt.arm.peers`).
+    ``peer_functions`` replaces peers by name (same contract as :mod:`subtask_opt.tour.peers`).
     """
     from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import make_targets
     from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.sequencing import SolverParams
     from subtask_opt.arm.serial import load_serial_arm
     from subtask_opt.arm.serial_problem import (
         MAX_KICKS,
         SerialProblem,
         evaluate_tour,
-        solve_serial,
+        solve_serial_problem,
     )
     from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
     from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
+    from subtask_opt.tour.solve import SolverParams
 
     stop: list[StoppingCriterion] | None = None
     if stall is not None:  # both checked before the problem is built
@@ -136,7 +136,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             "cpu_s": cpu,
             "cpu_total_s": float(sum(v for k, v in cpu.items() if k != "compile"))}
 
-    ours = solve_serial(problem, seed=seed, stop=stop, kicks=kicks, params=params)
+    ours = solve_serial_problem(problem, seed=seed, stop=stop, kicks=kicks, params=params).report
     record("ours", ours, dict(ours.cpu))
     out["methods"]["ours"]["counts"] = ours.counts
     out["methods"]["ours"]["legs_in_collision"] = evaluate_tour(

@@ -5,9 +5,9 @@ A :class:`SerialProblem` is built once: every IK solution of every target
 the matrix of joint-space leg times between all configurations and the home
 configuration (the synchronised per-joint trapezoid,
 :func:`~subtask_opt.arm.timing.joint_legs.trapezoid_leg_times`).
-:func:`solve_serial` searches the order and one configuration per target
+:func:`solve_serial_problem` searches the order and one configuration per target
 together (a generalised TSP on the shared micro-GA core, decoded exactly by a
-layered shortest path, :mod:`subtask_opt.arm._configuration_kernels`), tour
+layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
 home -> targets -> home.
 
 Legs are checked for collisions lazily: after a search, every leg of the
@@ -16,7 +16,7 @@ with the problem's clearance); a leg in collision is marked *infeasible* (a
 large finite penalty, so the GA avoids it) and the same order is decoded again
 and polished, until the answer uses only collision-free legs; then the GA runs
 once more knowing those legs and the shorter answer is kept
-(:func:`solve_serial`). Detours through via configurations are not attempted
+(:func:`solve_serial_problem`). Detours through via configurations are not attempted
 (``legs_detoured`` is always 0).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,7 +38,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from subtask_opt._kernel_cache import compile_seconds
-from subtask_opt.arm import _configuration_kernels as _gc
 from subtask_opt.arm.timing.joint_legs import (
     JointLimits,
     joint_limits,
@@ -50,17 +49,22 @@ from subtask_opt.base.errors import (
     InputDataError,
     NoPathError,
     ParameterError,
+    SubtaskOptError,
     require_in_range,
     require_int,
 )
-from subtask_opt.base.stop import StoppingCriterion, as_criteria
+from subtask_opt.base.stop import Progress, StoppingCriterion, as_criteria
+from subtask_opt.chromosomes import use
+from subtask_opt.tour import clustered as _gc
+from subtask_opt.tour.constraints import Canonical, TourConstraints
+from subtask_opt.tour.solve import Result
 
 if TYPE_CHECKING:
     from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import PoseTargets
     from subtask_opt.arm.scene import CollisionChecker, Scene
-    from subtask_opt.arm.sequencing import SolverParams
     from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.tour.solve import SolverParams
 
 MAX_CONFIGURATIONS = 20_000
 """Most configurations (over all targets) a problem may hold: the leg matrix is M x M."""
@@ -138,7 +142,7 @@ class SerialProblem:
     checker: CollisionChecker | None = field(init=False, repr=False)
     cpu: dict[str, float] = field(init=False, repr=False)
     dropped_in_collision: int = field(init=False, repr=False)
-    # ``legs`` is a read-only view of this array; solve_serial hands it to the kernels
+    # ``legs`` is a read-only view of this array; solve_serial_problem hands it to the kernels
     # without an M x M copy (a read-only array would be compiled for separately), blocks
     # the legs it finds in collision in place and restores them before it returns, under
     # ``_lock``
@@ -253,8 +257,9 @@ def _self_checker(arm: SerialArm) -> CollisionChecker:
 
 
 @dataclass(frozen=True, eq=False)
-class SerialResult:
-    """The answer of :func:`solve_serial`.
+class SerialReport:
+    """What a serial arm's tour means for the arm (``Result.report``,
+    :func:`solve_serial_problem`).
 
     Attributes:
         order: (N,) target indices in visiting order (home before the first, after the last).
@@ -274,6 +279,8 @@ class SerialResult:
             numba's compilation (or loading compiled code) on a first run.
         generations, restarts: what the micro-GA did (summed over rounds).
         seed: the seed.
+        open_path: the tour ends at its last target (no leg back home).
+        problem: the problem the tour belongs to (for :func:`subtask_opt.trajectory`).
     """
 
     order: np.ndarray
@@ -289,6 +296,44 @@ class SerialResult:
     generations: int
     restarts: int
     seed: int
+    open_path: bool = False
+    problem: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def robot(self) -> str:
+        return str(self.problem.arm.name) if self.problem is not None else "?"
+
+    def header(self, n: int) -> str:
+        """The summary's first line for ``n`` targets."""
+        return f"{n} targets, joint time model, robot {self.robot}"
+
+    def order_lines(self, order: np.ndarray) -> list[str]:
+        """The summary's lines after the order."""
+        c = self.counts
+        per = c["configurations_per_target"]
+        cpu = ", ".join(f"{k} {v:.3f} s" for k, v in self.cpu.items())
+        return [
+            f"{sum(per)} configurations ({min(per)}-{max(per)} per target); executed "
+            f"{self.total_time:.4f} s (ruckig), planned {self.planned_time:.4f} s (trapezoid)",
+            f"legs checked {c['legs_checked']}, infeasible {c['legs_infeasible']}, "
+            f"detoured {c['legs_detoured']}" + ("" if self.collision_checked
+                                                 else " (collisions not checked)"),
+            f"CPU: {cpu}",
+        ]
+
+    def leg_table(self) -> str:
+        """One row per leg: from, to, planned and executed time."""
+        names = ["home"] + [str(int(i)) for i in self.order] + (
+            [] if self.open_path else ["home"])
+        rows = [" leg  from    to  planned [s]  executed [s]"]
+        for k, (a, b) in enumerate(zip(names[:-1], names[1:], strict=True)):
+            rows.append(f"{k:4d} {a:>5} {b:>5} {self.planned_leg_times[k]:12.4f} "
+                        f"{self.leg_times[k]:13.4f}")
+        return "\n".join(rows)
+
+    def warning(self) -> str | None:
+        """Nothing to warn about (legs in collision are never in an answer)."""
+        return None
 
     @property
     def planned_time(self) -> float:
@@ -296,8 +341,9 @@ class SerialResult:
         return float(self.planned_leg_times.sum())
 
     def tour_configurations(self) -> np.ndarray:
-        """(N + 2, n) joint vectors in tour order: home, targets, home."""
-        return np.vstack([self.home, self.configurations[self.order], self.home])
+        """(N + 2, n) joint vectors in tour order: home, targets, home (open: no return)."""
+        return np.vstack([self.home, self.configurations[self.order]]
+                         + ([] if self.open_path else [self.home]))
 
     def summary(self) -> str:
         """A few lines for a terminal."""
@@ -333,20 +379,32 @@ class SerialResult:
             "generations": self.generations,
             "restarts": self.restarts,
             "seed": self.seed,
+            "open_path": self.open_path,
             "units": {"time": "s", "joints": "rad"},
         }
 
 
 MAX_ROUNDS = 200
-"""Most GA searches of the lazy leg check before :func:`solve_serial` gives up."""
+"""Most GA searches of the lazy leg check before :func:`solve_serial_problem` gives up."""
 MAX_REPAIRS = 100
-"""Most repair rounds in a row before :func:`solve_serial` runs the GA again."""
+"""Most repair rounds in a row before :func:`solve_serial_problem` runs the GA again."""
 
 
-def solve_serial(problem: SerialProblem, *, seed: int = 0,
+def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
                  stop: StoppingCriterion | list[StoppingCriterion] | None = None,
-                 params: SolverParams | None = None, kicks: int | None = None) -> SerialResult:
-    """Order the targets and pick one configuration each for minimum time, home to home.
+                 params: SolverParams | None = None, kicks: int | None = None,
+                 constraints: TourConstraints | None = None, progress: bool = False,
+                 certify: bool = False, certify_time_limit: float = 60.0) -> Result:
+    """Order the targets and pick one configuration each for minimum time, from home.
+
+    The tour starts at the problem's home configuration and (``tour="closed"``, the
+    default) returns there, or (``tour="open"``) ends at its last target. With a home,
+    ``constraints.start`` is the first target and ``constraints.end`` the last one;
+    precedence pairs ``(a, b)`` put target a before b. A plain tour searches order and
+    configurations together (the clustered GA, decoded exactly by a layered shortest
+    path); precedence or a fixed first or last target search the order with the
+    pinned-permutation GA over the cheapest legs between targets, then decode the
+    configurations of that order exactly (as for a planar arm).
 
     The first round runs the micro-GA (``stop``; default ``params.default_stop(n)``;
     ``params.runs`` independent runs, default one).
@@ -363,48 +421,127 @@ def solve_serial(problem: SerialProblem, *, seed: int = 0,
     (an M x M copy would cost as much as the search) and restored before it returns;
     concurrent calls on one problem wait for each other.
 
+    Every answer carries a lower bound: the Held-Karp bound of the cheapest planned leg
+    between every two targets (and home), which no tour's planned or executed time is
+    below (ruckig's jerk-limited legs are never faster than the planned trapezoid).
+    ``certify`` proves a closed tour without precedence optimal for the planned times by
+    the generalised-TSP branch and cut over every configuration (small problems), or
+    says why not.
+
     Args:
         kicks: kicks of the iterated local search per child and restart individual
-            (:func:`subtask_opt.ga.permutation.make_aux`); None: its default for N targets.
+            (:func:`subtask_opt.tour.permutation.make_aux`); None: its default for N targets.
+
+    Returns:
+        A :class:`~subtask_opt.tour.solve.Result` whose ``leg_times``/``total_time`` are
+        the executed (ruckig) times, ``configurations`` the (N, n) joint vectors (input
+        order) and ``report`` the :class:`SerialReport` (planned times, counts).
 
     Raises:
-        ParameterError: a bad seed, params or kicks.
+        ParameterError: a bad seed, params, kicks or constraints.
         NoPathError: no tour avoids the legs found in collision.
     """
-    from subtask_opt.arm.sequencing import SolverParams
+    from subtask_opt.tour.solve import SolverParams
 
     if not isinstance(problem, SerialProblem):
-        raise ParameterError(f"solve_serial needs a SerialProblem, got {type(problem).__name__}")
+        raise ParameterError(f"solve_serial_problem needs a SerialProblem, got "
+                             f"{type(problem).__name__}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
             0 <= seed < 2**63):
         raise ParameterError(f"seed must be an integer in [0, 2**63), got {seed!r}")
     params = params if params is not None else SolverParams()
     if not isinstance(params, SolverParams):
-        raise ParameterError(f"solve_serial: params must be a SolverParams, got {params!r}")
+        raise ParameterError(f"solve_serial_problem: params must be a SolverParams, got {params!r}")
     if kicks is not None:
-        require_int("solve_serial", "kicks", kicks, 0, MAX_KICKS)
+        require_int("solve_serial_problem", "kicks", kicks, 0, MAX_KICKS)
+    require_in_range("solve", "certify_time_limit", certify_time_limit, 1e-3, 86_400.0)
+    shape = _serial_shape(problem, constraints)
     with problem._lock:
         blocked: dict[tuple[int, int], float] = {}  # leg (a, b), a < b -> its time
         try:
-            return _search(problem, int(seed), stop, params, kicks, blocked)
+            return _search(problem, int(seed), stop, params, kicks, blocked, shape, progress,
+                           certify, certify_time_limit)
         finally:
             memory = problem._legs_memory
             for (a, b), value in blocked.items():
                 memory[a, b] = memory[b, a] = value
 
 
+@dataclass(frozen=True)
+class _Shape:
+    """A serial tour's shape in canonical form: nodes 0..N-1 the targets, N the home."""
+
+    constraints: TourConstraints
+    canon: Canonical
+    closeness: np.ndarray  # (N + 1, N + 1) cheapest planned leg between targets and home
+
+    @property
+    def pinned(self) -> bool:
+        return self.canon.needs_pins
+
+
+def _serial_shape(problem: SerialProblem, constraints: TourConstraints | None) -> _Shape:
+    """Validate ``constraints`` for a tour from the problem's home and put them in
+    canonical form (a first or last target as precedence pairs, an open path's free
+    return to the home)."""
+    from subtask_opt.tour.constraints import canonical
+
+    if constraints is None:
+        constraints = TourConstraints()
+    elif not isinstance(constraints, TourConstraints):
+        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
+                             f"{constraints!r}")
+    if constraints.home is not None:
+        raise ParameterError("a serial arm's tour starts at its home configuration: give it "
+                             "as ArmProblem(home=...) (--home q1,...,qn), not as "
+                             "TourConstraints.home")
+    n = problem.size
+    constraints.check_size(n, matrix_home=True, own_home=True)
+    pairs = list(constraints.precedence)
+    others = range(n)
+    if constraints.start is not None:
+        pairs += [(constraints.start, j) for j in others if j != constraints.start]
+    end = constraints.end
+    if end is not None and constraints.tour == "closed":
+        pairs += [(j, end) for j in others if j != end]
+        end = None
+    closeness = np.zeros((n + 1, n + 1))
+    closeness[:n, :n] = problem.dist
+    closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(problem.home_out,
+                                                              problem.offsets[:-1])
+    # the home is node N, where the canonical tour starts (a closed tour returns there,
+    # an open path's return is free)
+    canon_cons = TourConstraints(tour=constraints.tour, start=n, end=end,
+                                 precedence=tuple(dict.fromkeys(pairs)))
+    canon = canonical(closeness, canon_cons, default_start=n)
+    return _Shape(constraints, canon, closeness)
+
+
 MAX_KICKS = 1000
-"""Most kicks :func:`solve_serial` accepts."""
+"""Most kicks :func:`solve_serial_problem` accepts."""
 
 
 def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
-            kicks: int | None, blocked: dict[tuple[int, int], float]) -> SerialResult:
-    """:func:`solve_serial`'s rounds; every leg it blocks in the problem's leg memory goes
+            kicks: int | None, blocked: dict[tuple[int, int], float], shape: _Shape,
+            progress: bool, certify: bool, certify_time_limit: float) -> Result:
+    """:func:`solve_serial_problem`'s rounds; every leg it blocks in the problem's leg memory goes
     into ``blocked`` with its time first."""
+    from subtask_opt.base.progress import progress_bar
+    from subtask_opt.base.results import History
+    from subtask_opt.base.stop import MaxGenerations, NoImprovement, TargetCost
     from subtask_opt.ga.config import GAConfig
     from subtask_opt.ga.kinds import Kind
     from subtask_opt.ga.loop import run_ga
-    from subtask_opt.ga.permutation import SEARCH_FAST, SEARCH_PAPER, make_aux, neighbour_table
+    from subtask_opt.tour.permutation import (
+        SEARCH_EXACT,
+        SEARCH_FAST,
+        SEARCH_PAPER,
+        make_aux,
+        neighbour_table,
+    )
+    from subtask_opt.tour.precedence import make_pinned_aux
+    from subtask_opt.tour.problem import MatrixProblem
+    from subtask_opt.tour.solve import PINNED_STALL, _relaxation_bound, _rotate
 
     n = problem.size
     cpu = dict(problem.cpu)
@@ -419,10 +556,27 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     generations = restarts = 0
     rounds = ga_rounds = repairs = 0
     t0 = time.process_time()
-    # the legs are symmetric, so the search uses neighbour lists over targets + home
+    canon = shape.canon
+    open_path = canon.open_path
+    # the legs are symmetric, so a closed tour's search uses neighbour lists over targets +
+    # home; an open path's free return to the home is not, so it searches exactly
+    home_in = problem.home_in
+    if open_path:
+        home_in = np.zeros_like(problem.home_in)
+        search = SEARCH_PAPER if params.preset == "paper" else SEARCH_EXACT
     data = _gc.ConfiguredData(problem.dist.copy(), off, problem._legs_memory,
-                              problem.home_out.copy(), problem.home_in.copy(), float(search),
-                              _near(problem, params.neighbours), problem._cheapest)
+                              problem.home_out.copy(), home_in.copy(), float(search),
+                              (np.zeros((0, 0), dtype=np.int64) if open_path
+                               else _near(problem, params.neighbours)),
+                              np.zeros((0, 0)) if open_path else problem._cheapest)
+    bound = None
+    if n + 1 <= params.bound_max_nodes:
+        # every leg costs at least its targets' cheapest one, so a bound of the target
+        # matrix bounds every tour (and a tour that meets it is optimal)
+        bound = _relaxation_bound(MatrixProblem(shape.closeness), canon, canon.matrix)
+    history = History(math.inf, np.zeros(0), np.zeros(0))
+    runtime = 0.0
+    runs = 0
     owner = np.repeat(np.arange(n), np.diff(off))
     genes = np.zeros(n, dtype=np.int64)
     aux = None
@@ -437,7 +591,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
         cost = math.inf
         if n == 1 or (repair and repairs < MAX_REPAIRS):
             repairs += 1
-            if aux is not None:
+            if aux is not None and not shape.pinned:  # the pinned order is kept as it is
                 _gc.local_search(genes, n, data, aux)
             cost = float(_gc.decode(genes, n, data, choice))
         if cost >= penalty and n > 1:  # the first or last search, or a repair that failed
@@ -453,17 +607,41 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                            grasp_share=params.grasp_share, max_segment=params.max_segment,
                            neighbours=params.neighbours, search=search, kicks=kicks)
             criteria = as_criteria(stop, params.default_stop(n))
+            if shape.pinned and stop is None and params.preset != "paper":
+                criteria = [NoImprovement(max(PINNED_STALL, n // 2)), MaxGenerations(50_000)]
+            if bound is not None and stop is None and ga_rounds == 0:
+                criteria = [*criteria, TargetCost(bound * (1 + 1e-12) + 1e-12)]
             ga_rounds += 1
-            with _compile_apart(cpu) as compiled:
-                outcome = run_ga(Kind.CONFIGURED_PERMUTATION, config, data, aux, max_genes=n,
-                                 seed=seed, criteria=criteria, runs=params.runs or 1)
+            total = next((c.generations for c in criteria if isinstance(c, MaxGenerations)),
+                         None)
+            with _compile_apart(cpu) as compiled, progress_bar(
+                    progress, total=total, desc=f"micro-GA round {ga_rounds}",
+                    unit="gen") as bar:
+                on_chunk = _reporter(bar)
+                if shape.pinned:
+                    costs = np.array(canon.matrix)
+                    costs[:n, :n] = data.dist
+                    pinned = make_pinned_aux(n + 1, canon.first, canon.last, canon.pairs)
+                    outcome = run_ga(use(Kind.PINNED_PERMUTATION), config,
+                                     np.ascontiguousarray(costs), pinned, max_genes=n + 1,
+                                     seed=seed, criteria=criteria, on_chunk=on_chunk,
+                                     runs=params.runs or 1)
+                    genes = _rotate(outcome.genes, n)[1:].astype(np.int64)
+                else:
+                    outcome = run_ga(use(Kind.CONFIGURED_PERMUTATION), config, data, aux,
+                                     max_genes=n, seed=seed, criteria=criteria,
+                                     on_chunk=on_chunk, runs=params.runs or 1)
+                    genes = outcome.genes.astype(np.int64)
             t0 += compiled[0]  # not search time
-            genes = outcome.genes.astype(np.int64)
             generations += outcome.generations
             restarts += outcome.restarts
+            runtime += outcome.runtime_s
+            runs = outcome.runs  # per search (every round makes as many)
+            if ga_rounds == 1:
+                history = outcome.history
             cost = float(_gc.decode(genes, n, data, choice))
         cpu["search"] += time.process_time() - t0
-        tour = [-1] + [int(off[g] + choice[g]) for g in genes] + [-1]
+        tour = [-1] + [int(off[g] + choice[g]) for g in genes] + ([] if open_path else [-1])
         if cost >= penalty and best is not None:
             break  # a later search found nothing better than the collision-free answer
         if cost >= penalty:
@@ -501,7 +679,10 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
             break
     assert best is not None  # the loop ends only after recording a collision-free answer
     _, order, index = best
-    chosen, path, planned, executed = _tour_legs(problem, order, index)
+    broken = canon.violations(np.concatenate([[n], order]))
+    if broken:  # the operators keep every constraint: this is a bug, never an answer
+        raise SubtaskOptError(f"internal error: the answer breaks its constraints: {broken}")
+    chosen, path, planned, executed = _tour_legs(problem, order, index, open_path)
     counts = {
         "targets": n,
         "configurations_per_target": [int(k) for k in problem.counts],
@@ -513,16 +694,88 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
         "search_rounds": rounds,
         "ga_rounds": ga_rounds,
     }
-    return SerialResult(order=order, configuration_index=index, configurations=chosen,
-                        home=np.array(problem.home), leg_times=executed,
-                        planned_leg_times=planned, total_time=float(executed.sum()),
-                        collision_checked=problem.checker is not None, counts=counts,
-                        cpu=cpu, generations=generations, restarts=restarts, seed=seed)
+    certified = None
+    if certify:
+        t0 = time.process_time()
+        certified = _certify_serial(problem, data, shape, order, index, float(planned.sum()),
+                                    certify_time_limit)
+        cpu["certify"] = time.process_time() - t0
+    report = SerialReport(order=order, configuration_index=index, configurations=chosen,
+                          home=np.array(problem.home), leg_times=executed,
+                          planned_leg_times=planned, total_time=float(executed.sum()),
+                          collision_checked=problem.checker is not None, counts=counts,
+                          cpu=cpu, generations=generations, restarts=restarts, seed=seed,
+                          open_path=open_path, problem=problem)
+    return Result(order=order, total_time=float(executed.sum()), leg_times=executed,
+                  matrix=np.zeros((0, 0)), generations=generations, restarts=restarts,
+                  runtime_s=runtime, seed=seed, history=history, preset=params.preset,
+                  lower_bound=bound, certified=certified, report=report,
+                  constraints=shape.constraints, start=None, runs=max(runs, 1),
+                  configurations=chosen, cpu=cpu)
+
+
+def _certify_serial(problem: SerialProblem, data: Any, shape: _Shape, order: np.ndarray,
+                    index: np.ndarray, planned: float, time_limit: float) -> str:
+    """Prove the planned time optimal over every order and configuration, or say why not.
+
+    Up to :data:`~subtask_opt.tour.exact.CLUSTERED_HELD_KARP_MAX` targets, any shape:
+    Held and Karp's programme over (targets visited, configuration last visited),
+    precedence and a fixed first or last target kept. Larger closed tours without
+    precedence: the generalised-TSP branch and cut
+    (:func:`~subtask_opt.tour.exact.gtsp_optimum`, the home a cluster of one node).
+    Legs found in collision count as impossible (no feasible tour uses one)."""
+    from subtask_opt.tour.exact import CLUSTERED_HELD_KARP_MAX, clustered_held_karp, gtsp_optimum
+
+    canon = shape.canon
+    n = problem.size
+    m = int(problem.offsets[-1])
+    try:
+        if n <= CLUSTERED_HELD_KARP_MAX:
+            pairs = canon.pairs[(canon.pairs < n).all(axis=1)]
+            optimum = clustered_held_karp(
+                data.legs, problem.offsets, data.home_out,
+                None if canon.open_path else data.home_in, pairs=pairs,
+                last=canon.last if canon.last < n else -1)
+        elif canon.open_path or shape.pinned:
+            return (f"not certified: {n} targets; open paths, precedence and fixed first or "
+                    f"last targets are certified up to {CLUSTERED_HELD_KARP_MAX} targets")
+        elif m > MAX_CERTIFY_NODES:
+            return (f"not certified: {m} configurations; the branch and cut takes at most "
+                    f"{MAX_CERTIFY_NODES}")
+        else:
+            cost = np.zeros((m + 1, m + 1))
+            cost[:m, :m] = data.legs
+            cost[m, :m] = cost[:m, m] = data.home_out
+            owner = np.repeat(np.arange(n + 1), np.append(problem.counts, 1))
+            incumbent = [m] + [int(problem.offsets[t] + index[t]) for t in order]
+            optimum = gtsp_optimum(cost, owner, incumbent=incumbent,
+                                   time_limit=time_limit)[0]
+    except SubtaskOptError as exc:
+        return f"not certified: {exc}"
+    if planned <= optimum * (1 + 1e-9) + 1e-12:
+        return "optimal (proven, planned times)"
+    return (f"not optimal: the proven optimum of the planned times is {optimum:.6g} "
+            f"({100 * (planned / optimum - 1):.4f}% less)")
+
+
+MAX_CERTIFY_NODES = 3000
+"""Most configurations :func:`solve_serial_problem` hands its certificate's branch and cut."""
+
+
+def _reporter(bar: Any) -> Callable[[Progress], None]:
+    """A GA chunk callback that moves ``bar`` to the generation reached."""
+    done = [0]
+
+    def on_chunk(p: Progress) -> None:
+        bar.update(p.generation - done[0])
+        done[0] = p.generation
+        bar.set_postfix_str(f"best {p.best_cost:.4f}")
+    return on_chunk
 
 
 def _near(problem: SerialProblem, k: int) -> np.ndarray:
     """(N + 1, k) nearest nodes of each target and home (node N) by their cheapest legs."""
-    from subtask_opt.ga.permutation import neighbour_table
+    from subtask_opt.tour.permutation import neighbour_table
 
     n = problem.size
     off = problem.offsets
@@ -532,25 +785,26 @@ def _near(problem: SerialProblem, k: int) -> np.ndarray:
     return neighbour_table(closeness, k)
 
 
-def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray) -> tuple[
-        np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The chosen configurations (input order), the joint path home -> ... -> home, and each
-    leg's planned (trapezoid) and executed (ruckig) time."""
+def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray,
+               open_path: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The chosen configurations (input order), the joint path home -> ... -> home (open:
+    no return), and each leg's planned (trapezoid) and executed (ruckig) time."""
     n = problem.size
     chosen = np.array([problem.configurations[i][choice[i]] for i in range(n)])
-    path = np.vstack([problem.home, chosen[order], problem.home])
+    path = np.vstack([problem.home, chosen[order]] + ([] if open_path else [problem.home]))
+    legs = len(path) - 1
     planned = np.array([trapezoid_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
-                        for k in range(n + 1)])
+                        for k in range(legs)])
     lim = problem.arm.limits
     executed = np.array([ruckig_leg_time(path[k], path[k + 1], lim.velocity,
                                          problem.limits.acceleration, lim.jerk)
-                         for k in range(n + 1)])
+                         for k in range(legs)])
     return chosen, path, planned, executed
 
 
 def evaluate_tour(problem: SerialProblem, order: Any, choice: Any, *, seed: int = 0,
-                  cpu: dict[str, float] | None = None) -> SerialResult:
-    """The :class:`SerialResult` of a given tour (another method's answer, say).
+                  cpu: dict[str, float] | None = None) -> SerialReport:
+    """The :class:`SerialReport` of a given tour (another method's answer, say).
 
     Args:
         order: (N,) permutation of the targets (home before the first, after the last).
@@ -579,7 +833,7 @@ def evaluate_tour(problem: SerialProblem, order: Any, choice: Any, *, seed: int 
         "legs_detoured": 0,
         "search_rounds": 0,
     }
-    return SerialResult(order=o, configuration_index=c, configurations=chosen,
+    return SerialReport(problem=problem, order=o, configuration_index=c, configurations=chosen,
                         home=np.array(problem.home), leg_times=executed,
                         planned_leg_times=planned, total_time=float(executed.sum()),
                         collision_checked=problem.checker is not None, counts=counts,
@@ -643,6 +897,6 @@ def serial_problem_from_files(robot: str, case: str | Path, *, scene: str | Path
     return SerialProblem(targets, arm, home, scene=box_scene, clearance=clearance)
 
 
-__all__ = ["MAX_CONFIGURATIONS", "SerialProblem", "SerialResult", "default_home",
+__all__ = ["MAX_CONFIGURATIONS", "SerialProblem", "SerialReport", "default_home",
            "evaluate_tour",
-           "serial_problem_from_files", "solve_serial"]
+           "serial_problem_from_files", "solve_serial_problem"]

@@ -1,6 +1,6 @@
 """Executing a serial-arm tour: ruckig legs home -> targets -> home, and a validator.
 
-:func:`serial_trajectory` turns a :class:`~subtask_opt.arm.serial_problem.SerialResult`
+:func:`serial_trajectory` turns a :class:`~subtask_opt.arm.serial_problem.SerialReport`
 into a time-parameterised joint trajectory: one ruckig time-optimal
 synchronised rest-to-rest profile per leg (jerk-limited when the arm has jerk
 limits), stopping at every target. Its duration is the result's
@@ -25,7 +25,7 @@ from subtask_opt.arm.timing.joint_legs import ruckig_trajectory
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.serial_problem import SerialProblem, SerialResult
+    from subtask_opt.arm.serial_problem import SerialProblem, SerialReport
 
 RTOL = 1e-3
 """Relative slack on velocity, acceleration and jerk limits (round-off of the profiles)."""
@@ -47,6 +47,7 @@ class SerialTrajectory:
     def __init__(self, problem: SerialProblem, waypoints: np.ndarray, trajectories: list[Any],
                  durations: np.ndarray) -> None:
         self.problem = problem
+        self.result: SerialReport | None = None  # the tour it executes (serial_trajectory)
         self.waypoints = waypoints
         self._trajs = trajectories
         self.durations = durations
@@ -111,7 +112,7 @@ class SerialTrajectory:
         return path
 
 
-def serial_trajectory(problem: SerialProblem, result: SerialResult) -> SerialTrajectory:
+def serial_trajectory(problem: SerialProblem, result: SerialReport) -> SerialTrajectory:
     """Ruckig legs through ``result``'s configurations, home -> targets -> home."""
     lim = problem.arm.limits
     path = result.tour_configurations()
@@ -126,7 +127,9 @@ def serial_trajectory(problem: SerialProblem, result: SerialResult) -> SerialTra
                                  problem.limits.acceleration, lim.jerk)
         trajs.append(traj)
         durations.append(float(traj.duration))
-    return SerialTrajectory(problem, path, trajs, np.array(durations))
+    trajectory = SerialTrajectory(problem, path, trajs, np.array(durations))
+    trajectory.result = result
+    return trajectory
 
 
 @dataclass(frozen=True)
@@ -169,7 +172,7 @@ class SerialValidation:
                 f"{self.max_axis_error:.2e} rad)")
 
 
-def validate_serial_trajectory(trajectory: SerialTrajectory, result: SerialResult, *,
+def validate_serial_trajectory(trajectory: SerialTrajectory, result: SerialReport, *,
                                dt: float = 0.005, rtol: float = RTOL,
                                qtol: float = QTOL) -> SerialValidation:
     """Sample every ``dt`` s (and every leg boundary) and check everything (module doc)."""

@@ -1,6 +1,6 @@
 """Executable joint trajectories of a solved tour, and a validator.
 
-:func:`tour_trajectory` turns a :class:`~subtask_opt.arm.sequencing.Result` into a
+:func:`tour_trajectory` turns a :class:`~subtask_opt.arm.planar_problem.Result` into a
 time-parameterised joint trajectory of the closed tour, rest to rest at every
 subtask:
 
@@ -52,7 +52,8 @@ from subtask_opt.base.errors import InputDataError, ParameterError, require_posi
 
 if TYPE_CHECKING:
     from subtask_opt.arm.model import Arm
-    from subtask_opt.arm.sequencing import Result, SequencingProblem
+    from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.tour.solve import Result
 
 # Relative slack of the validator on velocity and acceleration limits: the line
 # legs meet their limits exactly at the grid points of the path and to
@@ -265,17 +266,18 @@ def _line_leg(p_from: np.ndarray, p_to: np.ndarray, q_from: np.ndarray, q_to: np
     return float(duration), evaluate
 
 
-def tour_trajectory(problem: SequencingProblem, result: Result) -> TourTrajectory:
+def tour_trajectory(problem: PlanarProblem, result: Result) -> TourTrajectory:
     """The executable joint trajectory of ``result``'s tour (see the module docstring).
 
     Raises:
         ParameterError: the problem has no arm (a custom matrix), or the result
             does not belong to the problem.
     """
-    from subtask_opt.arm.sequencing import Result, SequencingProblem
+    from subtask_opt.arm.planar_problem import PlanarProblem
     from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE
+    from subtask_opt.tour.solve import Result
 
-    if not isinstance(problem, SequencingProblem) or problem.arm is None:
+    if not isinstance(problem, PlanarProblem) or problem.arm is None:
         raise ParameterError("tour_trajectory needs a problem built from subtasks and an arm "
                              f"(got {type(problem).__name__}; a custom matrix has no robot to "
                              "move)")

@@ -1,7 +1,7 @@
 """Batches of independent jobs on many cores or a Dask cluster.
 
 * :func:`solve_many` solves many sequencing jobs (:class:`Job` descriptions or
-  ready :class:`~subtask_opt.SequencingProblem` objects) and returns one
+  ready :class:`~subtask_opt.PlanarProblem` objects) and returns one
   :class:`JobResult` each; a failed job reports its error, the others run on.
 * :func:`map_jobs` is the generic helper underneath: any picklable function
   over a list of items, in this process, on local worker processes or on an

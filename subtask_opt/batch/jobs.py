@@ -34,15 +34,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from subtask_opt.arm.sequencing import (
+from subtask_opt.arm.planar_problem import (
     DEFAULT_TIME_MODEL,
-    MatrixProblem,
-    SequencingProblem,
-    SolverParams,
+    PlanarProblem,
     default_configurations,
     solve,
 )
-from subtask_opt.arm.tasks import CASE_NAMES, SubtaskSet, load_subtasks
+from subtask_opt.arm.poses import load_targets
+from subtask_opt.arm.tasks import CASE_NAMES, load_subtasks
 from subtask_opt.arm.timing.models import TIME_MODELS
 from subtask_opt.base.errors import (
     InputDataError,
@@ -52,6 +51,9 @@ from subtask_opt.base.errors import (
     require_int,
 )
 from subtask_opt.batch.pool import map_jobs
+from subtask_opt.tour.constraints import TourConstraints
+from subtask_opt.tour.problem import MatrixProblem
+from subtask_opt.tour.solve import SolverParams
 
 if TYPE_CHECKING:
     from subtask_opt.base.stop import StoppingCriterion
@@ -71,7 +73,7 @@ class Job:
         id: a name unique within the batch (results and JSON are keyed by it).
         case: a built-in case name (``square20``, ``random30``) or the path of
             a subtask file (CSV with header ``x,y[,theta]`` or JSON).
-        robot: a robot name or a URDF path (see :func:`subtask_opt.load_arm`).
+        robot: a robot name or a URDF path (see :func:`subtask_opt.load_planar_arm`).
         time_model: ``joint`` (the library's default), ``line``, ``trapezoid``
             or ``paper``.
         seed: the solver's seed.
@@ -82,6 +84,15 @@ class Job:
         configurations: ``"fixed"`` or ``"optimize"``; default (None): the
             model's default (``optimize`` for the joint and line models).
         line_fallback: (line model) ``"joint"`` or ``"exclude"``.
+        home: a planar arm's home point ``(x, y)`` (m), visited first and last; a serial
+            arm's home configuration in degrees (default: the robot file's).
+        scene, standoff, axis_step, tool_frame: (serial arms) the cell's scene file, the
+            tool standoff (m), the sampling step about a tool axis (degrees) and the tool
+            frame (see ``subtask-opt solve``).
+
+    A serial arm's job (a robot that is not a planar 2R arm) takes a target file and the
+    joint model; a planar option given to it, or a serial option to a planar arm, is
+    refused.
     """
 
     id: str
@@ -95,6 +106,11 @@ class Job:
     elbow: int = 0
     configurations: str | None = None
     line_fallback: str = "joint"
+    home: tuple[float, ...] | None = None
+    scene: str | None = None
+    standoff: float = 0.0
+    axis_step: float = 45.0
+    tool_frame: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id.strip():
@@ -125,6 +141,49 @@ class Job:
         if self.line_fallback not in LINE_FALLBACKS:
             raise ParameterError(f"Job.line_fallback must be one of {', '.join(LINE_FALLBACKS)}, "
                                  f"got {self.line_fallback!r}")
+        if self.home is not None:
+            try:
+                home = tuple(float(v) for v in self.home)
+            except (TypeError, ValueError):
+                raise ParameterError(f"Job.home must be a list of numbers, got "
+                                     f"{self.home!r}") from None
+            if not home or not all(math.isfinite(v) and abs(v) <= 1e4 for v in home):
+                raise ParameterError(f"Job.home must hold finite numbers in [-1e4, 1e4], got "
+                                     f"{self.home!r}")
+            object.__setattr__(self, "home", home)
+        require_in_range("Job", "standoff", self.standoff, -1.0, 1.0)
+        require_in_range("Job", "axis_step", self.axis_step, 1e-6, 360.0)
+        for name in ("scene", "tool_frame"):
+            value = getattr(self, name)
+            if value is not None and (not isinstance(value, str) or not value.strip()):
+                raise ParameterError(f"Job.{name} must be a non-empty string, got {value!r}")
+        defaults = {f.name: f.default for f in fields(self)}
+        serial = self.serial
+        wrong = (("time_model", "case_seed", "first", "k", "elbow", "configurations",
+                  "line_fallback") if serial else ("scene", "standoff", "axis_step",
+                                                   "tool_frame"))
+        for name in wrong:
+            value = getattr(self, name)
+            if value != defaults[name] and not (name == "time_model" and value == "joint"):
+                raise ParameterError(f"Job.{name} applies to {'planar' if serial else 'serial'}"
+                                     f" arms only; {self.robot} is "
+                                     f"{'a serial' if serial else 'a planar'} arm")
+        if serial and self.builtin:
+            raise ParameterError(f"Job.case {self.case!r} is a planar built-in case; a serial "
+                                 f"arm ({self.robot}) takes a target file")
+        if not serial and self.home is not None and len(self.home) != 2:
+            raise ParameterError(f"Job.home of a planar arm is a point (x, y), got "
+                                 f"{len(self.home)} numbers")
+
+    @property
+    def serial(self) -> bool:
+        """Whether the robot is a serial arm (not a planar 2R arm)."""
+        from subtask_opt.arm.model import ROBOT_NAMES
+        from subtask_opt.arm.problem import movable_joints
+
+        if self.robot in ROBOT_NAMES:
+            return False
+        return not (self.robot.lower().endswith(".urdf") and movable_joints(self.robot) == 2)
 
     @property
     def builtin(self) -> bool:
@@ -140,6 +199,7 @@ class Job:
         """JSON-ready form (one entry of a manifest)."""
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["case"] = str(self.case)
+        out["home"] = None if self.home is None else list(self.home)
         return out
 
     @classmethod
@@ -229,12 +289,12 @@ class _Task:
     id: str
     seed: int
     job: Job | None = None
-    subtasks: SubtaskSet | None = None
+    subtasks: Any = None  # the job's targets, read on the calling machine
     problem: bytes | None = None
     warm_kind: tuple[str, str] = ("custom", "fixed")
 
 
-def _pickle_problem(problem: SequencingProblem | MatrixProblem) -> bytes:
+def _pickle_problem(problem: PlanarProblem | MatrixProblem) -> bytes:
     """The problem as bytes a worker can load."""
     return pickle.dumps(problem, protocol=pickle.HIGHEST_PROTOCOL)
 
@@ -250,23 +310,30 @@ def _error_text(exc: BaseException) -> str:
 
 def _run_task(task: _Task, *, stop: Any, params: SolverParams | None) -> JobResult:
     """Solve one task in a worker; every exception becomes a failed JobResult."""
-    from subtask_opt.arm.model import load_arm
+    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import builtin_case
 
     start = time.perf_counter()
     try:
         problem = None if task.problem is None else pickle.loads(task.problem)
-        if problem is None:
+        if problem is None and task.job is not None and task.job.serial:
+            result = _solve_serial_job(task.job, task.subtasks, task.seed, stop, params)
+        elif problem is None:
             job = task.job
             assert job is not None
-            arm = load_arm(job.robot)
+            arm = load_planar_arm(job.robot)
             subtasks = (task.subtasks if task.subtasks is not None
                         else builtin_case(str(job.case), arm, seed=job.case_seed))
-            problem = SequencingProblem(subtasks, arm, time_model=job.time_model,
+            problem = PlanarProblem(subtasks, arm, time_model=job.time_model,
                                         first=job.first, k=job.k, elbow=job.elbow,
                                         configurations=job.configuration_mode,
                                         line_fallback=job.line_fallback)
-        result = solve(problem, seed=task.seed, stop=stop, params=params)
+            constraints = (None if job.home is None
+                           else TourConstraints(home=(job.home[0], job.home[1])))
+            result = solve(problem, seed=task.seed, stop=stop, params=params,
+                           constraints=constraints)
+        else:
+            result = solve(problem, seed=task.seed, stop=stop, params=params)
     except Exception as exc:  # one bad job must not stop the batch
         return JobResult(task.id, False, error=_error_text(exc), seed=task.seed,
                          worker_time_s=time.perf_counter() - start, worker=_worker_name())
@@ -275,6 +342,22 @@ def _run_task(task: _Task, *, stop: Any, params: SolverParams | None) -> JobResu
                      worker_time_s=time.perf_counter() - start, seed=task.seed,
                      worker=_worker_name())
 
+
+def _solve_serial_job(job: Job, targets: Any, seed: int, stop: Any,
+                      params: SolverParams | None) -> Any:
+    """A serial arm's job, solved as ``subtask-opt solve --robot ...`` solves it."""
+    from subtask_opt.arm.problem import ArmProblem, load_robot
+    from subtask_opt.arm.problem import solve as solve_arm
+
+    robot = load_robot(job.robot, tool_frame=job.tool_frame)
+    home = None if job.home is None else np.radians(np.asarray(job.home, dtype=float))
+    problem = ArmProblem(targets, robot, home=home, scene=job.scene)
+    return solve_arm(problem, seed=seed, stop=stop, params=params)
+
+
+SERIAL_WARM_TARGETS = "x,y,z,dx,dy,dz\n0.45,-0.15,0.20,1,0,-0.3\n0.45,0.05,0.20,1,0,-0.3\n" \
+                      "0.42,-0.10,0.35,1,0,-0.3\n"
+"""Three UR5 holes: the warm-up of a batch with serial arms."""
 
 _WARMED: set[tuple[tuple[str, str], ...]] = set()
 
@@ -288,19 +371,22 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
     """
     if kinds in _WARMED:
         return
-    from subtask_opt.arm.model import load_arm
+    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import random_subtasks
     from subtask_opt.base.stop import MaxGenerations
 
-    arm = load_arm("planar_2r")
+    arm = load_planar_arm("planar_2r")
     subtasks = random_subtasks(arm, 5, seed=0)
     for time_model, mode in kinds:
         try:
+            if time_model == "serial":
+                _warm_serial()
+                continue
             if time_model == "custom":
-                problem: SequencingProblem | MatrixProblem = MatrixProblem(
-                    SequencingProblem(subtasks, arm, time_model="trapezoid").matrix)
+                problem: PlanarProblem | MatrixProblem = MatrixProblem(
+                    PlanarProblem(subtasks, arm, time_model="trapezoid").matrix)
             else:
-                problem = SequencingProblem(subtasks, arm, time_model=time_model,
+                problem = PlanarProblem(subtasks, arm, time_model=time_model,
                                             configurations=mode)
             solve(problem, seed=0, stop=MaxGenerations(3))
         except SubtaskOptError as exc:  # e.g. a mode the model refuses: its jobs will say so
@@ -309,10 +395,28 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
     _WARMED.add(kinds)
 
 
+def _warm_serial() -> None:
+    """Compile or load a serial arm's kernels (IK, leg times, the clustered search)."""
+    import tempfile
+
+    from subtask_opt.arm.problem import ArmProblem, load_robot, load_targets
+    from subtask_opt.arm.problem import solve as solve_arm
+    from subtask_opt.base.stop import MaxGenerations
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "warm.csv"
+        path.write_text(SERIAL_WARM_TARGETS)
+        problem = ArmProblem(load_targets(path), load_robot("ur5"),
+                             home=np.radians([0, -90, 90, -90, -90, 0]))
+    solve_arm(problem, seed=0, stop=MaxGenerations(3))
+
+
 def _warm_kinds(tasks: list[_Task]) -> tuple[tuple[str, str], ...]:
     kinds: set[tuple[str, str]] = set()
     for task in tasks:
-        if task.job is not None:
+        if task.job is not None and task.job.serial:
+            kinds.add(("serial", "optimize"))
+        elif task.job is not None:
             kinds.add((task.job.time_model, task.job.configuration_mode))
         else:
             kinds.add(task.warm_kind)
@@ -337,7 +441,7 @@ def _seed_list(seeds: int | Sequence[int] | None, n: int) -> list[int | None]:
     return [int(s) for s in values]
 
 
-def _prepare(problems: Sequence[Job | SequencingProblem | MatrixProblem],
+def _prepare(problems: Sequence[Job | PlanarProblem | MatrixProblem],
              seeds: int | Sequence[int] | None) -> tuple[list[_Task], dict[int, JobResult]]:
     """Tasks for the workers, and the jobs that failed already (unreadable subtask files)."""
     seed_of = _seed_list(seeds, len(problems))
@@ -348,20 +452,20 @@ def _prepare(problems: Sequence[Job | SequencingProblem | MatrixProblem],
         if isinstance(item, Job):
             ident = item.id
             seed = item.seed if seed is None else seed
-        elif isinstance(item, (SequencingProblem, MatrixProblem)):
+        elif isinstance(item, (PlanarProblem, MatrixProblem)):
             ident = f"problem-{i}"
             if seed is None:
                 raise ParameterError(
                     f"solve_many: item {i} is a {type(item).__name__}, which has no seed of its "
                     "own: pass seeds= (one integer or one per item)")
         else:
-            raise ParameterError(f"solve_many: item {i} must be a Job, SequencingProblem or "
+            raise ParameterError(f"solve_many: item {i} must be a Job, PlanarProblem or "
                                  f"MatrixProblem, got {type(item).__name__}")
         if ident in seen:
             raise ParameterError(
                 f"solve_many: job id {ident!r} is used twice (items {seen[ident]} and {i})")
         seen[ident] = i
-        if isinstance(item, (SequencingProblem, MatrixProblem)):
+        if isinstance(item, (PlanarProblem, MatrixProblem)):
             kind = (("custom", "fixed") if isinstance(item, MatrixProblem)
                     else (item.time_model, str(item.configurations)))
             tasks.append(_Task(ident, seed, problem=_pickle_problem(item), warm_kind=kind))
@@ -370,14 +474,16 @@ def _prepare(problems: Sequence[Job | SequencingProblem | MatrixProblem],
         subtasks = None
         if not job.builtin:
             try:
-                subtasks = load_subtasks(job.case)
+                subtasks = (load_targets(job.case, standoff=job.standoff,
+                                         axis_step=job.axis_step)
+                            if job.serial else load_subtasks(job.case))
             except SubtaskOptError as exc:
                 failed[i] = JobResult(ident, False, error=_error_text(exc), seed=seed)
         tasks.append(_Task(ident, seed, job=job, subtasks=subtasks))
     return tasks, failed
 
 
-def solve_many(problems: Sequence[Job | SequencingProblem | MatrixProblem], *,
+def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
                seeds: int | Sequence[int] | None,
                stop: StoppingCriterion | list[StoppingCriterion] | None = None,
                client: Any = None, workers: int | None = None, progress: bool = False,
@@ -391,7 +497,7 @@ def solve_many(problems: Sequence[Job | SequencingProblem | MatrixProblem], *,
 
     Args:
         problems: :class:`Job` descriptions and/or ready problems
-            (:class:`~subtask_opt.SequencingProblem`, ``MatrixProblem``).
+            (:class:`~subtask_opt.PlanarProblem`, ``MatrixProblem``).
         seeds: one seed for every item, a sequence of one seed per item, or
             None to use each Job's own ``seed`` (a ready problem then
             raises: it has no seed of its own).
@@ -416,7 +522,7 @@ def solve_many(problems: Sequence[Job | SequencingProblem | MatrixProblem], *,
             a scheduler address without dask installed. A job that fails
             does not raise: its JobResult says why.
     """
-    if isinstance(problems, (Job, SequencingProblem, MatrixProblem)):
+    if isinstance(problems, (Job, PlanarProblem, MatrixProblem)):
         problems = [problems]
     problems = list(problems)
     if stop is not None:
@@ -462,7 +568,7 @@ def overhead_per_job(results: Sequence[JobResult], wall_s: float, slots: int) ->
     return (wall_s * slots - sum(r.worker_time_s for r in results)) / len(results)
 
 
-def load_jobs(paths: Sequence[str | Path]) -> list[Job]:
+def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
     """Jobs from subtask files and JSON manifests (the ``batch`` command's JOBS).
 
     A ``.csv`` file, or a ``.json`` object with ``"points"``, is one job whose
@@ -473,6 +579,9 @@ def load_jobs(paths: Sequence[str | Path]) -> list[Job]:
 
     A subtask file's content is checked when its job runs (a bad one fails that
     job only); a path that does not exist, or a malformed manifest, raises.
+    ``file_options`` (``robot``, ``scene``, ``home``, ...: :class:`Job` fields) apply to
+    the jobs of subtask and target files; a manifest gives each job its own, so it may
+    not be mixed with them.
 
     Raises:
         InputDataError: a missing file, a file neither subtasks nor manifest,
@@ -485,7 +594,7 @@ def load_jobs(paths: Sequence[str | Path]) -> list[Job]:
             raise InputDataError(f"job file not found: {raw}")
         suffix = path.suffix.lower()
         if suffix == ".csv":
-            jobs.append(Job(str(raw), str(raw)))
+            jobs.append(_file_job(raw, file_options))
             continue
         if suffix != ".json":
             raise InputDataError(f"job file must be a .csv or .json subtask file or a .json "
@@ -494,9 +603,13 @@ def load_jobs(paths: Sequence[str | Path]) -> list[Job]:
             data = json.loads(path.read_text())
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise InputDataError(f"{raw}: not valid JSON ({exc})") from None
-        if isinstance(data, dict) and "points" in data:
-            jobs.append(Job(str(raw), str(raw)))
+        if isinstance(data, dict) and ("points" in data or "targets" in data):
+            jobs.append(_file_job(raw, file_options))
             continue
+        if file_options:
+            raise ParameterError(f"--{next(iter(file_options)).replace('_', '-')} applies to "
+                                 f"subtask and target files; the manifest {raw} gives each "
+                                 "job its own")
         entries = data.get("jobs") if isinstance(data, dict) else data
         if not isinstance(entries, list) or not entries:
             raise InputDataError(f'{raw}: expected a subtask file {{"points": ...}} or a '
@@ -509,6 +622,13 @@ def load_jobs(paths: Sequence[str | Path]) -> list[Job]:
             raise InputDataError(f"job id {job.id!r} appears twice")
         seen.add(job.id)
     return jobs
+
+
+def _file_job(raw: str | Path, options: dict[str, Any]) -> Job:
+    try:
+        return Job(str(raw), str(raw), **options)
+    except ParameterError as exc:
+        raise ParameterError(f"{raw}: {exc}") from None
 
 
 __all__ = ["Job", "JobResult", "load_jobs", "overhead_per_job", "solve_many", "warm_up"]

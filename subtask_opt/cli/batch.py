@@ -12,6 +12,7 @@ from subtask_opt.cli._common import (
     add_no_progress,
     add_stop_options,
     add_workers,
+    float_in,
     json_output,
     plot_output,
     refuse_overwriting_inputs,
@@ -22,12 +23,17 @@ from subtask_opt.cli._common import (
     write_json,
 )
 
+FILE_OPTIONS = ("robot", "time_model", "home", "scene", "standoff", "axis_step", "tool_frame")
+"""The options that become :class:`~subtask_opt.batch.Job` fields of every file job."""
+
 # failed jobs printed one per line before "... and N more"
 _SHOWN_FAILURES = 20
 
 
 def register(root: argparse._SubParsersAction) -> None:
     """Add the ``batch`` command."""
+    from subtask_opt.arm.timing import TIME_MODELS
+
     p = root.add_parser(
         "batch",
         help="solve many subtask files in parallel (local processes or a Dask cluster)",
@@ -40,6 +46,23 @@ def register(root: argparse._SubParsersAction) -> None:
                    help='subtask files (.csv with header x,y[,theta] or .json) or manifests '
                         '(.json: [{"id": ..., "case": FILE|square20|random30, "robot": ..., '
                         '"time_model": ..., "seed": ..., "case_seed": ...}, ...])')
+    files = p.add_argument_group(
+        "the jobs of subtask and target files (a manifest gives each job its own)")
+    files.add_argument("--robot", metavar="NAME|PATH.urdf",
+                       help="robot of every file job (default planar_2r); a serial arm "
+                            "(ur5, ...) takes target files x,y,z,dx,dy,dz or poses")
+    files.add_argument("--time-model", choices=TIME_MODELS, metavar="MODEL",
+                       help="time model of every planar file job (default joint)")
+    files.add_argument("--home", type=_numbers, metavar="X,Y|Q1,...,QN",
+                       help="a planar arm's home point X,Y (m), or a serial arm's home "
+                            "configuration in degrees (default: the robot file's)")
+    files.add_argument("--scene", metavar="SCENE.json", help="(serial arms) boxes to avoid")
+    files.add_argument("--standoff", type=float_in(-1.0, 1.0), metavar="M",
+                       help="(serial arms) tool standoff along its axis in metres (default 0)")
+    files.add_argument("--axis-step", type=float_in(0.0, 360.0, open_low=True),
+                       metavar="DEG", help="(serial arms) sampling step about a tool axis "
+                                           "(default 45)")
+    files.add_argument("--tool-frame", metavar="FRAME", help="(serial arms) the tool frame")
     add_workers(p, what="the jobs")
     p.add_argument("--seed", type=seed, default=None, metavar="N",
                    help="solver seed of every job (default: each manifest job's own seed, "
@@ -54,11 +77,19 @@ def register(root: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
+def _numbers(text: str) -> tuple[float, ...]:
+    from subtask_opt.cli.solve import _signed_numbers
+
+    return _signed_numbers(text)
+
+
 def run(args: argparse.Namespace) -> int:
     from subtask_opt.batch import load_jobs, solve_many
 
-    refuse_overwriting_inputs(args.jobs, [args.json, args.plot])
-    jobs = load_jobs(args.jobs)
+    refuse_overwriting_inputs([*args.jobs, args.scene], [args.json, args.plot])
+    options = {name: getattr(args, name) for name in FILE_OPTIONS
+               if getattr(args, name) is not None}
+    jobs = load_jobs(args.jobs, **options)
     where = workers_options(args)
     started = time.perf_counter()
     results = solve_many(jobs, seeds=args.seed, stop=stop_criteria(args),

@@ -16,7 +16,7 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
     b = bench.add_parser(
         "robotsp", help="RoboTSP's 245-hole drilling benchmark on vs060_drill",
         description="Ours beside RoboTSP's method, TSP C-space and LKH's GTSP (from "
-                    "subtask_opt.arm.peers) on RoboTSP's subsets: executed (validated ruckig) "
+                    "subtask_opt.tour.peers) on RoboTSP's subsets: executed (validated ruckig) "
                     "time, CPU split, configurations per hole; RoboTSP's published figures "
                     "as context (the robot frames were reconstructed).")
     b.add_argument("--data", default=str(DEFAULT_DATA), metavar="DIR",

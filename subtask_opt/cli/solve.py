@@ -8,6 +8,8 @@ import warnings
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from subtask_opt.base.stop import TargetCost
 from subtask_opt.cli._common import (
     EXIT_FAILED,
@@ -17,6 +19,7 @@ from subtask_opt.cli._common import (
     add_outputs,
     add_stop_options,
     animation_output,
+    failed,
     float_in,
     floats,
     html_output,
@@ -32,15 +35,11 @@ from subtask_opt.cli._common import (
 
 def register(root: argparse._SubParsersAction) -> None:
     """Add the ``solve`` command."""
-    from subtask_opt.arm.sequencing import (
-        CONFIGURATION_MODES,
-        CONFIGURED_RUNS,
-        DEFAULT_TIME_MODEL,
-        PRESETS,
-    )
+    from subtask_opt.arm.planar_problem import CONFIGURATION_MODES, DEFAULT_TIME_MODEL
     from subtask_opt.arm.timing import TIME_MODELS
     from subtask_opt.ga.loop import MAX_RUNS
-    from subtask_opt.ga.permutation import KICKS_FROM
+    from subtask_opt.tour.permutation import KICKS_FROM
+    from subtask_opt.tour.solve import CONFIGURED_RUNS, PRESETS
 
     p = root.add_parser(
         "solve",
@@ -51,23 +50,24 @@ def register(root: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--case", required=True, metavar="square20|random30|PATH",
                    help="built-in case or a CSV (header x,y[,theta]) / JSON file of subtasks")
-    p.add_argument("--case-seed", type=seed, default=0, metavar="N",
+    p.add_argument("--case-seed", type=seed, default=None, metavar="N",
                    help="seed of the random30 generator (default 0)")
-    p.add_argument("--robot", default="planar_2r", metavar="planar_2r|asr_twodof|PATH.urdf",
-                   help="robot model (default planar_2r)")
+    p.add_argument("--robot", default="planar_2r",
+                   metavar="planar_2r|asr_twodof|ur3|ur5|ur10|panda|vs060_drill|PATH.urdf",
+                   help="robot model (default planar_2r); a 2-joint URDF is a planar arm")
     p.add_argument("--time-model", default=DEFAULT_TIME_MODEL, choices=TIME_MODELS,
                    help=f"time model (default {DEFAULT_TIME_MODEL}: times the arm can execute; "
                         "paper and trapezoid are Cartesian models that may promise legs the "
                         "arm cannot drive)")
-    p.add_argument("--k", type=float_in(0.0, 0.5), default=0.1,
+    p.add_argument("--k", type=float_in(0.0, 0.5), default=None,
                    help="via-point fraction of the paper time model, in [0, 0.5] (default 0.1)")
-    p.add_argument("--elbow", type=int, default=0, choices=(0, 1),
+    p.add_argument("--elbow", type=int, default=None, choices=(0, 1),
                    help="IK branch used at every subtask with --configurations fixed "
                         "(0 elbow-down, 1 elbow-up; default 0)")
     p.add_argument("--configurations", choices=CONFIGURATION_MODES, default=None,
                    help="choose the elbow configuration of each subtask with the order "
                         "(default for joint and line) or keep --elbow (default otherwise)")
-    p.add_argument("--line-fallback", choices=("joint", "exclude"), default="joint",
+    p.add_argument("--line-fallback", choices=("joint", "exclude"), default=None,
                    help="line model: drive an infeasible straight line as a joint move "
                         "(default) or forbid it")
     p.add_argument("--check-all-legs", action="store_true",
@@ -75,13 +75,15 @@ def register(root: argparse._SubParsersAction) -> None:
                         "arm's joint limits, not only the tour's legs (JSON diagnostics; "
                         "N(N-1)/2 lines, seconds at N = 1000)")
     p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
-                   help="index of the subtask the tour (or open path) starts at")
+                   help="index of the subtask the tour (or open path) starts at; with a "
+                        "serial arm's home, the first target after it")
     shape = p.add_argument_group("tour shape and constraints")
     shape.add_argument("--tour", choices=("closed", "open"), default="closed",
                        help="closed: return to the start (default); open: a path that does "
                             "not come back")
     shape.add_argument("--end", type=non_negative_int, default=None, metavar="I",
-                       help="(--tour open) the subtask the path ends at (default: free)")
+                       help="(--tour open) the subtask the path ends at (default: free); a "
+                            "serial arm's closed tour: the last target before home")
     shape.add_argument("--home", type=_signed_numbers, default=None, metavar="X,Y|Q1,...,QN",
                        help="visited first and last, not a subtask: a point X,Y (m) the planar "
                             "arm must reach, or for a serial arm its home configuration in "
@@ -106,6 +108,11 @@ def register(root: argparse._SubParsersAction) -> None:
     limits.add_argument("--amax", type=floats, metavar="A[,A]",
                         help="joint acceleration limits, rad/s^2")
     limits.add_argument("--jmax", type=floats, metavar="J[,J]", help="joint jerk limits, rad/s^3")
+    limits.add_argument("--speed-scale", type=float_in(0.0, 1.0, open_low=True), default=None,
+                        metavar="F", help="joint speed limits times F, in (0, 1] (after --vmax)")
+    limits.add_argument("--accel-scale", type=float_in(0.0, 1.0, open_low=True), default=None,
+                        metavar="F", help="joint acceleration (and jerk) limits times F, in "
+                                          "(0, 1] (after --amax/--jmax)")
     add_stop_options(p, title="stopping (any criterion given stops the run)", target=True)
     out = p.add_argument_group("output")
     add_outputs(out, plot="the tour over the workspace and the convergence plot")
@@ -122,42 +129,72 @@ def register(root: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def run(args: argparse.Namespace) -> int:
-    if _is_serial(args):
-        return _run_serial(args)
-    from subtask_opt.arm.model import load_arm
-    from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
-    from subtask_opt.arm.tasks import CASE_NAMES, builtin_case, load_subtasks
+PLANAR = "planar"
+SERIAL = "serial"
+ONLY: dict[str, str] = {
+    "case_seed": PLANAR, "k": PLANAR, "elbow": PLANAR, "configurations": PLANAR,
+    "line_fallback": PLANAR, "check_all_legs": PLANAR, "animate": PLANAR,
+    "scene": SERIAL, "standoff": SERIAL, "axis_step": SERIAL, "tool_frame": SERIAL,
+    "limits": SERIAL, "view": SERIAL,
+}
+"""The options that apply to one kind of robot only; any other option applies to every
+robot (``tests/cli/test_solve_options.py`` walks them all). Given for the other kind,
+an option is refused (exit 2), never ignored."""
 
-    refuse_overwriting_inputs([args.case, args.robot, args.precedence],
-                              [args.json, args.plot, args.trajectory, args.animate])
-    constraints = _constraints(args)
-    arm = load_arm(args.robot)
-    if args.vmax or args.amax or args.jmax:
-        arm = arm.with_joint_limits(velocity=args.vmax, acceleration=args.amax, jerk=args.jmax)
-    if args.case in CASE_NAMES:
-        subtasks = builtin_case(args.case, arm, seed=args.case_seed)
-    else:
-        subtasks = load_subtasks(Path(args.case))
+
+def _given(args: argparse.Namespace, dest: str) -> bool:
+    value = getattr(args, dest)
+    return value is not None and value is not False
+
+
+def _option(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def run(args: argparse.Namespace) -> int:
+    import time
+
+    from subtask_opt.arm.problem import ArmProblem, load_robot, solve
+    from subtask_opt.base.errors import ParameterError
+    from subtask_opt.tour.solve import SolverParams
+
+    started = time.monotonic()
+    refuse_overwriting_inputs([args.case, args.robot, args.precedence, args.scene, args.limits],
+                              [args.json, args.plot, args.trajectory, args.animate, args.view])
+    robot = load_robot(args.robot, tool_frame=args.tool_frame, limits=_limits(args.limits))
+    kind = PLANAR if robot.planar else SERIAL
+    for dest, only in ONLY.items():
+        if only != kind and _given(args, dest):
+            raise ParameterError(f"{_option(dest)} applies to {only} arms only; {robot.name} "
+                                 f"is {'a planar' if robot.planar else 'a serial'} arm")
+    if not robot.planar and args.time_model != "joint":
+        raise ParameterError(f"--time-model {args.time_model}: the Cartesian models are for "
+                             f"planar arms; {robot.name} uses the joint model")
+    if _given(args, "case_seed") and args.case != "random30":
+        raise ParameterError(f"--case-seed applies to --case random30 only, not {args.case}")
+    if any(_given(args, d) for d in ("vmax", "amax", "jmax", "speed_scale", "accel_scale")):
+        robot = robot.with_limits(velocity=args.vmax, acceleration=args.amax, jerk=args.jmax,
+                                  speed_scale=args.speed_scale or 1.0,
+                                  accel_scale=args.accel_scale or 1.0)
+    constraints = _constraints(args, robot.planar)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        problem = SequencingProblem(subtasks, arm, time_model=args.time_model, first=args.first,
-                                    k=args.k, elbow=args.elbow,
-                                    configurations=args.configurations,
-                                    line_fallback=args.line_fallback,
-                                    check_all_legs=args.check_all_legs)
+        problem = ArmProblem(_targets(args, robot), robot, home=_home(args, robot),
+                             **_problem_options(args, robot.planar))
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
-    stop = stop_criteria(args)
+    stop = _stop(args, started)
+    if stop == "spent":
+        return failed(f"the time limit of {args.max_runtime:g} s was spent building the "
+                      "problem (IK, collision checks, leg times) before any search")
     params = SolverParams(preset=args.preset, runs=args.runs)
     if stop is not None and all(isinstance(c, TargetCost) for c in stop):
-        stop = stop + params.default_stop(len(subtasks),
-                                          configured=problem.optimizes_configurations)
+        configured = not robot.planar or problem.compiled.optimizes_configurations
+        stop = stop + params.default_stop(problem.size, configured=configured)
     result = solve(problem, seed=args.seed, stop=stop, params=params,
                    progress=not args.no_progress, certify=args.certify,
                    certify_time_limit=args.certify_time_limit, constraints=constraints)
     report = result.report
-    assert report is not None
     print(result.summary())
     if not args.quiet:
         print(report.leg_table())
@@ -165,84 +202,198 @@ def run(args: argparse.Namespace) -> int:
     if warning:
         print(f"warning: {warning}", file=sys.stderr)
     executed = None
-    if args.trajectory or args.animate:
-        executed = _executed(args, problem, result)
-        if executed is None:
+    if args.trajectory or args.animate or args.view or not robot.planar:
+        executed = _executed(args, result)
+        if executed is None and robot.planar:
             return EXIT_FAILED
     if args.json:
         payload = result.to_dict()
-        payload["case"] = args.case
-        payload["points"] = problem.subtasks.points.tolist()
+        payload["robot"] = robot.name
+        payload["time_model"] = report.to_dict().get("time_model", "joint")
+        payload["case"] = str(args.case)
+        payload["points"] = np.asarray(problem.targets.points).tolist()
         if executed is not None:
-            trajectory, check = executed
-            payload["trajectory"] = {
-                "duration": trajectory.duration, "valid": check.ok,
+            payload["trajectory"] = _trajectory_json(*executed)
+        write_json(args.json, payload)
+        print(f"wrote {args.json}")
+    if not robot.planar and executed is None:
+        return EXIT_FAILED
+    if args.plot:
+        _plot(args, problem, result, executed)
+    if executed is not None:
+        _write_trajectory(args, problem, result, executed[0])
+    return EXIT_OK
+
+
+def _limits(value: str | None) -> Any:
+    """``--limits``: a limit-set name, or the per-joint arrays of a JSON file."""
+    import json
+
+    from subtask_opt.base.errors import InputDataError
+
+    if value is None or not value.lower().endswith(".json"):
+        return value
+    try:
+        return json.loads(Path(value).read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise InputDataError(f"cannot read the limits file {value}: {exc}") from None
+
+
+def _targets(args: argparse.Namespace, robot: Any) -> Any:
+    from subtask_opt.arm.problem import load_targets
+    from subtask_opt.arm.tasks import CASE_NAMES, builtin_case
+
+    if robot.planar and args.case in CASE_NAMES:
+        return builtin_case(args.case, robot.model, seed=args.case_seed or 0)
+    if robot.planar:
+        return load_targets(Path(args.case))
+    return load_targets(args.case, standoff=0.0 if args.standoff is None else args.standoff,
+                        axis_step=45.0 if args.axis_step is None else args.axis_step)
+
+
+def _home(args: argparse.Namespace, robot: Any) -> Any:
+    """``--home``: a planar arm's point X,Y (m), a serial arm's configuration (degrees)."""
+    from subtask_opt.base.errors import ParameterError
+
+    if args.home is None:
+        return None
+    if robot.planar:
+        if len(args.home) != 2:
+            raise ParameterError(f"--home takes a point X,Y for a planar arm, got "
+                                 f"{len(args.home)} numbers")
+        return tuple(args.home)
+    if len(args.home) != robot.nq:
+        raise ParameterError(f"--home takes {robot.nq} joint values (degrees) for "
+                             f"{robot.name}, got {len(args.home)}")
+    return np.radians(np.asarray(args.home, dtype=float))
+
+
+def _problem_options(args: argparse.Namespace, planar: bool) -> dict[str, Any]:
+    if not planar:
+        return {"scene": args.scene}
+    return {"time_model": args.time_model, "first": args.first,
+            "k": 0.1 if args.k is None else args.k,
+            "elbow": 0 if args.elbow is None else args.elbow,
+            "configurations": args.configurations,
+            "line_fallback": args.line_fallback or "joint",
+            "check_all_legs": args.check_all_legs}
+
+
+def _stop(args: argparse.Namespace, started: float) -> Any:
+    """The stopping options; ``--time-limit`` bounds the whole run, so the search gets
+    what building the problem (IK, collision checks, leg times) left of it ("spent": none)."""
+    import time
+
+    from subtask_opt.base.stop import MaxRuntime
+
+    stop = stop_criteria(args)
+    if args.max_runtime is None or stop is None:
+        return stop
+    left = args.max_runtime - (time.monotonic() - started)
+    if left <= 0:
+        return "spent"
+    return [MaxRuntime(left) if isinstance(c, MaxRuntime) else c for c in stop]
+
+
+def _trajectory_json(trajectory: Any, check: Any) -> dict[str, Any]:
+    from subtask_opt.arm.trajectory import ValidationReport
+
+    if isinstance(check, ValidationReport):
+        return {"duration": trajectory.duration, "valid": check.ok,
                 "max_velocity_ratio": max(check.max_velocity_ratio),
                 "max_acceleration_ratio": max(check.max_acceleration_ratio),
                 "max_jerk_ratio": (None if check.max_jerk_ratio is None
                                    else max(check.max_jerk_ratio)),
                 "valid_tolerances": {"rtol": check.rtol, "jtol": check.jtol},
                 "legs": [leg.kind for leg in trajectory.legs]}
-        write_json(args.json, payload)
-        print(f"wrote {args.json}")
-    if args.plot:
-        from subtask_opt.plotting.sequencing import save_solution_figure
-
-        save_solution_figure(result, problem, args.plot)
-        print(f"wrote {args.plot}")
-    if executed is not None:
-        _write_trajectory(args, problem, executed[0])
-    return EXIT_OK
+    return {"duration": trajectory.duration, "valid": check.ok,
+            "violations": list(check.violations)}
 
 
-def _constraints(args: argparse.Namespace) -> Any:
-    """The ``TourConstraints`` of the shape options (an unsupported output: one error line)."""
-    from subtask_opt.arm.constraints import TourConstraints, read_precedence
+def _constraints(args: argparse.Namespace, planar: bool) -> Any:
+    """The ``TourConstraints`` of the shape options (an output that cannot draw the shape:
+    one error line)."""
     from subtask_opt.base.errors import ParameterError
+    from subtask_opt.tour.constraints import TourConstraints, read_precedence
 
-    if args.home is not None and len(args.home) != 2:
-        raise ParameterError(f"--home takes a point X,Y, got {len(args.home)} numbers")
     pairs = read_precedence(args.precedence) if args.precedence else ()
-    constraints = TourConstraints(tour=args.tour, end=args.end,
-                                  home=None if args.home is None else tuple(args.home),
-                                  precedence=pairs)
-    if args.tour == "open" or args.home is not None:
+    # a planar arm's --first is its problem's first subtask (ArmProblem.first)
+    start = None if planar else args.first
+    constraints = TourConstraints(tour=args.tour, start=start, end=args.end, precedence=pairs)
+    if planar and (args.tour == "open" or args.home is not None):
         wanted = [flag for flag, value in (("--plot", args.plot), ("--trajectory",
                   args.trajectory), ("--animate", args.animate)) if value]
         if wanted:
-            raise ParameterError(f"{', '.join(wanted)} draw closed tours over the subtasks; "
-                                 "not available with --tour open or --home yet")
+            raise ParameterError(f"{', '.join(wanted)} draw a planar arm's closed tours over "
+                                 "the subtasks; not available with --tour open or --home yet")
     return constraints
 
 
-def _executed(args: argparse.Namespace, problem: Any, result: Any) -> Any:
+def _executed(args: argparse.Namespace, result: Any) -> Any:
     """The tour's trajectory and its check; None (after one line) when it is invalid."""
-    from subtask_opt.arm.trajectory import tour_trajectory, validate_trajectory
+    from subtask_opt.arm.problem import trajectory, validate
 
-    trajectory = tour_trajectory(problem, result)
-    check = validate_trajectory(trajectory, dt=min(args.dt, 1e-3))
+    executed = trajectory(result)
+    planar = not hasattr(executed, "result")
+    check = validate(executed, dt=min(args.dt, 1e-3) if planar else min(args.dt, 0.005))
     print(check.summary())
     if not check.ok:
-        print("subtask-opt: failed: the executed trajectory breaks a limit: "
+        print("subtask-opt: failed: the executed trajectory is invalid: "
               + "; ".join(check.violations), file=sys.stderr)
         return None
-    if problem.time_model in ("paper", "trapezoid"):
-        print(f"note: the {problem.time_model} model promised {result.total_time:.4f} s; "
-              f"driving its straight lines within the joint limits takes "
-              f"{trajectory.duration:.4f} s")
-    return trajectory, check
+    model = result.report.time_model if planar else "joint"
+    if model in ("paper", "trapezoid"):
+        print(f"note: the {model} model promised {result.total_time:.4f} s; driving its "
+              f"straight lines within the joint limits takes {executed.duration:.4f} s")
+    return executed, check
 
 
-def _write_trajectory(args: argparse.Namespace, problem: Any, trajectory: Any) -> None:
+def _plot(args: argparse.Namespace, problem: Any, result: Any, executed: Any) -> None:
+    """``--plot``: the planar tour and its convergence, or a serial arm's tool path."""
+    if problem.robot.planar:
+        from subtask_opt.plotting.sequencing import save_solution_figure
+
+        save_solution_figure(result, problem.compiled, args.plot)
+    else:
+        from subtask_opt.plotting.serial import plot_serial_tour
+
+        trajectory = executed[0]
+        q = trajectory.states(trajectory.sample_times(0.01))[0]
+        serial = problem.compiled
+        plot_serial_tour(serial.arm, serial.targets.points, trajectory.tool_positions(q),
+                         result.leg_times, result.order, args.plot,
+                         title=_title(args, problem, result), q_home=serial.home,
+                         scene=serial.scene)
+    print(f"wrote {args.plot}")
+
+
+def _title(args: argparse.Namespace, problem: Any, result: Any) -> str:
+    return (f"{problem.robot.name}: {problem.size} targets from {args.case}, "
+            f"{result.total_time:.2f} s executed")
+
+
+def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
+                      trajectory: Any) -> None:
+    """``--trajectory`` (CSV), ``--animate`` (planar GIF) and ``--view`` (3-D HTML)."""
     if args.trajectory:
         trajectory.to_csv(args.trajectory, args.dt)
         print(f"wrote {args.trajectory}")
     if args.animate:
         from subtask_opt.plotting.trajectory import animate_tour
 
-        animate_tour(problem, trajectory, args.animate,
+        animate_tour(problem.compiled, trajectory, args.animate,
                      progress=not args.no_progress and sys.stderr.isatty())
         print(f"wrote {args.animate}")
+    if args.view:
+        from subtask_opt.plotting.arm3d import write_tour_html
+
+        serial = problem.compiled
+        times = trajectory.sample_times(0.01)
+        q = trajectory.states(times)[0]
+        write_tour_html(args.view, serial.arm, times, q, targets=serial.targets.points,
+                        axes=serial.targets.axes, scene=serial.scene, order=result.order,
+                        title=_title(args, problem, result))
+        print(f"wrote {args.view}")
 
 
 # ---------------------------------------------------------------- serial arms (6-/7-DOF)
@@ -252,9 +403,9 @@ _SERIAL_FLAGS = ("view", "scene", "standoff", "axis_step", "tool_frame", "limits
 
 def _add_serial_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
-        "serial arms (--robot ur3|ur5|ur10|panda|vs060_drill|PATH.urdf; --case is a CSV of "
-        "x,y,z,dx,dy,dz or x,y,z,qx,qy,qz,qw rows)")
-    g.add_argument("--scene", metavar="SCENE.json",
+        "serial arms only (--robot ur3|ur5|ur10|panda|vs060_drill|PATH.urdf; --case is a CSV "
+        "of x,y,z,dx,dy,dz or x,y,z,qx,qy,qz,qw rows)")
+    g.add_argument("--scene", metavar="SCENE.json", default=None,
                    help='boxes to avoid: {"boxes": [{"name", "center", "half_extents", '
                         '"rotation"}]}')
     g.add_argument("--standoff", type=float_in(-1.0, 1.0), default=None, metavar="M",
@@ -283,91 +434,3 @@ def _signed_numbers(text: str) -> tuple[float, ...]:
     return values
 
 
-def _is_serial(args: argparse.Namespace) -> bool:
-    from subtask_opt.arm.serial import SERIAL_ROBOT_NAMES
-
-    if args.robot in SERIAL_ROBOT_NAMES or any(
-            getattr(args, f) is not None for f in _SERIAL_FLAGS):
-        return True
-    return str(args.robot).lower().endswith(".urdf") and _movable_joints(args.robot) != 2
-
-
-def _movable_joints(urdf: str) -> int:
-    """Number of revolute/prismatic/continuous joints of a URDF (-1 if unreadable)."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.parse(urdf).getroot()
-    except (OSError, ET.ParseError):
-        return -1
-    return sum(j.get("type") in ("revolute", "prismatic", "continuous")
-               for j in root.iter("joint"))
-
-
-def _run_serial(args: argparse.Namespace) -> int:
-    from subtask_opt.arm.sequencing import SolverParams
-    from subtask_opt.arm.serial_problem import serial_problem_from_files, solve_serial
-    from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
-    from subtask_opt.base.errors import ParameterError
-
-    if args.time_model != "joint":
-        raise ParameterError(f"--time-model {args.time_model}: serial arms use the joint "
-                             "model only")
-    refuse_overwriting_inputs([args.case, args.robot, args.scene, args.limits],
-                              [args.json, args.trajectory, args.plot, args.view])
-    if args.animate:
-        raise ParameterError("--animate draws the planar arm; use --view OUT.html for a serial arm")
-    problem = serial_problem_from_files(
-        args.robot, args.case, scene=args.scene, home_deg=args.home,
-        standoff=0.0 if args.standoff is None else args.standoff,
-        axis_step=45.0 if args.axis_step is None else args.axis_step,
-        tool_frame=args.tool_frame, limits=args.limits)
-    stop = stop_criteria(args)
-    params = SolverParams(preset=args.preset, runs=args.runs)
-    if stop is not None and all(isinstance(c, TargetCost) for c in stop):
-        stop = stop + params.default_stop(problem.size)
-    result = solve_serial(problem, seed=args.seed, stop=stop, params=params)
-    print(result.summary())
-    trajectory = serial_trajectory(problem, result)
-    check = validate_serial_trajectory(trajectory, result, dt=min(args.dt, 0.005))
-    print(check.summary())
-    if args.json:
-        payload = result.to_dict()
-        payload["robot"] = problem.arm.name
-        payload["case"] = str(args.case)
-        payload["trajectory"] = {"duration": trajectory.duration, "valid": check.ok,
-                                 "violations": list(check.violations)}
-        write_json(args.json, payload)
-        print(f"wrote {args.json}")
-    if not check.ok:
-        print("subtask-opt: failed: the executed trajectory is invalid: "
-              + "; ".join(check.violations), file=sys.stderr)
-        return EXIT_FAILED
-    if args.trajectory:
-        trajectory.to_csv(args.trajectory, args.dt)
-        print(f"wrote {args.trajectory}")
-    if args.plot or args.view:
-        _serial_figures(args, problem, result, trajectory)
-    return EXIT_OK
-
-
-def _serial_figures(args: argparse.Namespace, problem: Any, result: Any, trajectory: Any) -> None:
-    """``--plot`` (targets, tool path, time per leg) and ``--view`` (3-D HTML animation)."""
-    times = trajectory.sample_times(0.01)
-    q = trajectory.states(times)[0]
-    targets = problem.targets
-    title = (f"{problem.arm.name}: {len(targets)} targets from {args.case}, "
-             f"{result.total_time:.2f} s executed")
-    if args.plot:
-        from subtask_opt.plotting.serial import plot_serial_tour
-
-        plot_serial_tour(problem.arm, targets.points, trajectory.tool_positions(q),
-                         result.leg_times, result.order, args.plot, title=title,
-                         q_home=problem.home, scene=problem.scene)
-        print(f"wrote {args.plot}")
-    if args.view:
-        from subtask_opt.plotting.arm3d import write_tour_html
-
-        write_tour_html(args.view, problem.arm, times, q, targets=targets.points,
-                        axes=targets.axes, scene=problem.scene, order=result.order, title=title)
-        print(f"wrote {args.view}")

@@ -39,8 +39,8 @@ def register(root: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from subtask_opt.arm.tsplib import read_tsplib, solve_tsp
     from subtask_opt.base.errors import InputDataError
+    from subtask_opt.tour.tsplib import read_tsplib, solve_tsp
 
     refuse_overwriting_inputs([args.file], [args.json, args.plot])
     instance = read_tsplib(args.file)

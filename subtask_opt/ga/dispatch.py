@@ -24,10 +24,10 @@ Operator signatures (``data``, ``aux`` belong to the operators):
 ``improve(genes, length, data, aux) -> length``
     In-place local search (the identity for a plain GA).
 
-The permutation kind is registered here; the other kinds register themselves
-from their domain (the configured permutation from :mod:`subtask_opt.arm`, the
-waypoint path from :mod:`subtask_opt.planners.grid`) with :func:`register`,
-so nothing under :mod:`subtask_opt.ga` imports a robot or a map.
+No kind is registered here, nor at the import of the module that defines it: every
+kind's operators are registered in one place, :mod:`subtask_opt.chromosomes`, when a
+caller asks for the kind (``run_ga(use(Kind.X), ...)``), so nothing under
+:mod:`subtask_opt.ga` imports a tour, a robot or a map.
 """
 
 from __future__ import annotations
@@ -38,7 +38,6 @@ from numba.core.errors import TypingError
 from numba.extending import overload
 
 from subtask_opt.base.errors import ParameterError
-from subtask_opt.ga import permutation
 from subtask_opt.ga.kinds import TAGS, Kind
 
 OPERATOR_NAMES = ("randomize", "evaluate", "crossover", "mutate", "improve")
@@ -58,7 +57,7 @@ _REGISTRY: dict[int, OperatorSet] = {}
 
 
 def register(kind: Kind, operators: OperatorSet) -> None:
-    """Make ``operators`` the chromosome type ``kind`` (call at import of the defining module)."""
+    """Make ``operators`` the chromosome type ``kind`` (:func:`subtask_opt.chromosomes.use`)."""
     if not isinstance(kind, Kind):
         raise ParameterError(f"register: kind must be a Kind, got {kind!r}")
     missing = [n for n in OPERATOR_NAMES if not callable(getattr(operators, n, None))]
@@ -163,10 +162,3 @@ def _improve(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
     def impl(kind, genes, length, data, aux):  # type: ignore[no-untyped-def]
         return op(genes, length, data, aux)
     return impl
-
-
-register(Kind.PERMUTATION, OperatorSet(
-    permutation.randomize, permutation.tour_cost, permutation.crossover,
-    permutation.no_mutation, permutation.improve))
-
-from subtask_opt.ga import precedence  # noqa: E402,F401  (registers the pinned permutation)

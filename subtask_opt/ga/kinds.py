@@ -10,16 +10,16 @@ class Kind(IntEnum):
     """Integer tag of a chromosome type; :mod:`subtask_opt.ga.dispatch` maps it to operators."""
 
     PERMUTATION = 0
-    """A closed tour: a permutation of 0..N-1 (:mod:`subtask_opt.ga.permutation`)."""
+    """A closed tour: a permutation of 0..N-1 (:mod:`subtask_opt.tour.permutation`)."""
     CONFIGURED_PERMUTATION = 1
     """A tour whose per-subtask configurations are decoded exactly
-    (registered by :mod:`subtask_opt.arm._configuration_kernels`)."""
+    (registered by :mod:`subtask_opt.tour.clustered`)."""
     WAYPOINT_PATH = 2
     """A variable-length list of grid waypoints
     (registered by :mod:`subtask_opt.planners.grid._waypoint_kernels`)."""
     PINNED_PERMUTATION = 3
     """A closed tour with a pinned first (and maybe last) node and precedence pairs
-    (:mod:`subtask_opt.ga.precedence`)."""
+    (:mod:`subtask_opt.tour.precedence`)."""
 
 
 # Numba sees a kind through the *type* of a tag argument: a distinct NamedTuple

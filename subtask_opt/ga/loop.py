@@ -44,8 +44,8 @@ from subtask_opt.ga.config import (
     GAConfig,
     LoopParams,
 )
+from subtask_opt.ga.genes import copy_run
 from subtask_opt.ga.kinds import Kind, tag
-from subtask_opt.ga.permutation import copy_run
 
 # Layout of the int64 ``counters`` array (the loop's state between chunks).
 _GEN, _LAST_IMPROVE, _RESTARTS, _BEST_LEN = range(4)

@@ -5,7 +5,7 @@ The paper's experiment: the planar 2-DOF arm, 20 subtasks on a square lattice
 30 random subtasks (optimum at about generation 800, Figs. 11-13), with its
 time model (eq. 6-19, ``time_model="paper"``). Ours: the ``paper`` preset from
 several seeds against the optimum certified by an exact MILP
-(:func:`~subtask_opt.arm.exact.milp_optimum`), not by our own runs.
+(:func:`~subtask_opt.tour.exact.milp_optimum`), not by our own runs.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def optimal_tours(matrix: np.ndarray, order: np.ndarray, optimum: float
     """Optimal tours certified by MILP: ``order`` and, for each of its edges, the
     optimum of the matrix with that edge made dearer, when it costs ``optimum``
     on the original matrix (a lower bound on the number of optimal tours)."""
-    from subtask_opt.arm.exact import milp_optimum, tour_length
+    from subtask_opt.tour.exact import milp_optimum, tour_length
 
     found = {canonical(order)}
     bump = float(np.max(matrix))
@@ -56,16 +56,18 @@ def optimal_tours(matrix: np.ndarray, order: np.ndarray, optimum: float
 def run(out: Path, *, quick: bool = False, seed: int = 0,
         map_runs: Any = None) -> tuple[list[Row], list[Path]]:
     """Both experiments from ``5`` (quick) or ``20`` seeds; figures into ``out``."""
-    from subtask_opt import SequencingProblem, SolverParams, builtin_case, load_arm, solve
-    from subtask_opt.arm.exact import milp_optimum
+    from subtask_opt import SolverParams, builtin_case, solve
+    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.arm.planar_problem import PlanarProblem
     from subtask_opt.plotting.sequencing import save_solution_figure
+    from subtask_opt.tour.exact import milp_optimum
 
     seeds = range(seed, seed + (5 if quick else 20))
-    arm = load_arm("planar_2r")
+    arm = load_planar_arm("planar_2r")
     rows: list[Row] = []
     files: list[Path] = []
     for case, paper_gen in PAPER_GENERATION.items():
-        problem = SequencingProblem(builtin_case(case, arm), arm, time_model="paper")
+        problem = PlanarProblem(builtin_case(case, arm), arm, time_model="paper")
         optimum, optimal_order = milp_optimum(problem.matrix)
         optimum = float(optimum)
         optima: set[tuple[int, ...]] = set()

@@ -35,7 +35,8 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from subtask_opt.arm.model import Arm
-    from subtask_opt.arm.sequencing import Result, SequencingProblem
+    from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.tour.solve import Result
 
 # Tours with more subtasks than this list their order in a side table instead of
 # numbering the legs on the map.
@@ -108,13 +109,13 @@ class _Leg:
     infeasible: bool
 
 
-def _configurations(problem: SequencingProblem, configurations: Any) -> np.ndarray:
+def _configurations(problem: PlanarProblem, configurations: Any) -> np.ndarray:
     if configurations is not None:
         return np.asarray(configurations, dtype=np.int64)
     return np.asarray(problem.timing.configurations, dtype=np.int64)
 
 
-def tour_legs(problem: SequencingProblem, order: Any, configurations: Any = None,
+def tour_legs(problem: PlanarProblem, order: Any, configurations: Any = None,
               samples: int = 48) -> list[Any]:
     """The legs of the closed tour as the arm drives them under the problem's time model.
 
@@ -208,7 +209,7 @@ def _draw_arrow(ax: Axes, xy: np.ndarray, colour: str) -> None:
                 zorder=4)
 
 
-def _inset(ax: Axes, problem: SequencingProblem, legs: list[Any],
+def _inset(ax: Axes, problem: PlanarProblem, legs: list[Any],
            extent: tuple[float, float, float, float], sub: Axes | None = None) -> None:
     """The whole workspace, small: in ``sub``, or to the right of ``ax`` below its legend."""
     from matplotlib.patches import Rectangle
@@ -229,7 +230,7 @@ def _inset(ax: Axes, problem: SequencingProblem, legs: list[Any],
     sub.set_facecolor("white")
 
 
-def plot_tour(problem: SequencingProblem, order: Any, *, ax: Axes | None = None,
+def plot_tour(problem: PlanarProblem, order: Any, *, ax: Axes | None = None,
               title: str | None = None, draw_arm: bool = True,
               configurations: Any = None, label_legs: bool | None = None,
               inset: bool | Axes = True) -> Axes:
@@ -383,7 +384,7 @@ def plot_convergence(result: Result, *, ax: Axes | None = None,
     return ax
 
 
-def solution_figure(result: Result, problem: SequencingProblem) -> Figure:
+def solution_figure(result: Result, problem: PlanarProblem) -> Figure:
     """The optimised tour, the convergence and (for large tours) the visiting order."""
     import matplotlib.pyplot as plt
 
@@ -413,7 +414,7 @@ def solution_figure(result: Result, problem: SequencingProblem) -> Figure:
     return fig
 
 
-def save_solution_figure(result: Result, problem: SequencingProblem, path: str | Path) -> Path:
+def save_solution_figure(result: Result, problem: PlanarProblem, path: str | Path) -> Path:
     """Write :func:`solution_figure` to ``path`` (PNG, PDF, SVG by extension)."""
     import matplotlib.pyplot as plt
 
@@ -425,7 +426,7 @@ def save_solution_figure(result: Result, problem: SequencingProblem, path: str |
     return path
 
 
-def optimal_tours_figure(panels: Sequence[tuple[SequencingProblem, Any, str]], *,
+def optimal_tours_figure(panels: Sequence[tuple[PlanarProblem, Any, str]], *,
                          title: str) -> Figure:
     """Tours side by side, one panel each: ``(problem, order, panel title)``.
 
@@ -452,7 +453,7 @@ def optimal_tours_figure(panels: Sequence[tuple[SequencingProblem, Any, str]], *
     return fig
 
 
-def save_optimal_tours_figure(panels: Sequence[tuple[SequencingProblem, Any, str]],
+def save_optimal_tours_figure(panels: Sequence[tuple[PlanarProblem, Any, str]],
                               path: str | Path, *, title: str) -> Path:
     """Write :func:`optimal_tours_figure` to ``path`` (PNG, PDF, SVG by extension)."""
     import matplotlib.pyplot as plt

@@ -69,7 +69,11 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     if path.shape[0] < 2:
         raise ParameterError(f"plot_serial_tour: tool_path needs at least 2 points, "
                              f"got {path.shape[0]}")
-    legs = checked_array("plot_serial_tour", "leg_times", leg_times, (n + 1,))
+    raw = np.asarray(leg_times)
+    # N + 1 legs: a closed tour back home; N: an open path ending at its last target
+    legs = checked_array("plot_serial_tour", "leg_times", leg_times,
+                         (n,) if raw.shape == (n,) else (n + 1,))
+    closed = legs.shape[0] == n + 1
     if np.any(legs < 0):
         raise ParameterError(f"plot_serial_tour: leg_times must be >= 0, got min "
                              f"{legs.min()}")
@@ -149,19 +153,20 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     flat.grid(alpha=0.3)
 
     # per-leg times
-    x = np.arange(n + 1)
+    x = np.arange(legs.shape[0])
     bar.bar(x, legs, color="#1c7ed6", width=0.8 if n < 100 else 1.0, label="leg time")
     bar.axhline(legs.mean(), color="#c92a2a", lw=1, ls="--",
                 label=f"mean {legs.mean():.3f} s")
     if n <= 20:
-        names = ["home"] + [f"t{i}" for i in o] + ["home"]
+        names = ["home"] + [f"t{i}" for i in o] + (["home"] if closed else [])
         bar.set_xticks(x, [f"{names[k]}\u2192{names[k + 1]}" for k in x], rotation=60,
                        fontsize=8, ha="right")
         bar.set_xlabel("leg (from target \u2192 to target, t = target index)")
     else:
-        bar.set_xlabel("leg number (0: home to first target, last: back home)")
+        bar.set_xlabel("leg number (0: home to first target, last: "
+                       + ("back home)" if closed else "to the last target)"))
     bar.set_ylabel("leg time [s]")
-    bar.set_title(f"time per leg: {n + 1} legs, total {legs.sum():.3f} s", fontsize=10)
+    bar.set_title(f"time per leg: {legs.shape[0]} legs, total {legs.sum():.3f} s", fontsize=10)
     bar.legend(loc="upper right", fontsize=8)
     bar.grid(axis="y", alpha=0.3)
     fig.suptitle(title or f"{arm.name}: tour of {n} targets", fontsize=12)
@@ -178,7 +183,8 @@ def plot_serial_tour(arm: SerialArm, targets: Any, tool_path: Any, leg_times: An
         targets: (N, 3) target positions (m), numbered on the figure by visit order.
         tool_path: (T, 3) tool positions along the executed tour (m); the first is
             the tool at home.
-        leg_times: (N + 1,) times (s) of home -> first, ..., last -> home.
+        leg_times: (N + 1,) times (s) of home -> first, ..., last -> home; (N,) for an
+            open path that ends at its last target.
         order: (N,) target indices in visiting order.
         path: the image file (PNG, PDF, SVG by extension); folders are created.
         title: the figure's title, saying what was run.

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from subtask_opt.arm.sequencing import SequencingProblem
+    from subtask_opt.arm.planar_problem import PlanarProblem
     from subtask_opt.arm.trajectory import TourTrajectory
 
 
@@ -69,7 +69,7 @@ def _title(trajectory: TourTrajectory) -> str:
             f"executed {trajectory.duration:.3f} s (predicted {trajectory.predicted_time:.3f} s)")
 
 
-def plot_executed_path(problem: SequencingProblem, trajectory: TourTrajectory, *,
+def plot_executed_path(problem: PlanarProblem, trajectory: TourTrajectory, *,
                        dt: float = 0.005, ax: Axes | None = None) -> Axes:
     """The tip's path over the workspace: straight legs solid, joint moves dashed."""
     import matplotlib.pyplot as plt
@@ -99,7 +99,7 @@ def plot_executed_path(problem: SequencingProblem, trajectory: TourTrajectory, *
     return ax
 
 
-def animate_tour(problem: SequencingProblem, trajectory: TourTrajectory, path: str | Path, *,
+def animate_tour(problem: PlanarProblem, trajectory: TourTrajectory, path: str | Path, *,
                  fps: int = 15, speed: float = 1.0, max_frames: int = 150,
                  dpi: int = 72, progress: bool = False) -> Path:
     """Write a GIF of the arm executing the tour.

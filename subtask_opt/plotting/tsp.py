@@ -10,7 +10,7 @@ import numpy as np
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-    from subtask_opt.arm.tsplib import TspInstance, TspSolution
+    from subtask_opt.tour.tsplib import TspInstance, TspSolution
 
 
 def plot_tour(instance: TspInstance, solution: TspSolution, *, ax: Axes | None = None) -> Axes:

@@ -108,7 +108,7 @@ _CSV = st.one_of(
 
 
 def _check_subtasks(data: bytes, suffix: str) -> None:
-    from subtask_opt import load_subtasks
+    from subtask_opt.arm.tasks import load_subtasks
 
     s = _reads_or_refuses(load_subtasks, data, f"s{suffix}")
     if s is not None:
@@ -135,12 +135,13 @@ _PLANAR = json.loads((ROBOTS / "planar_2r.json").read_text())
 
 
 def _check_planar_limits(data: bytes) -> None:
-    from subtask_opt import load_arm
+    from subtask_opt.arm.model import load_planar_arm
 
     def setup(tmp: Path) -> None:
         (tmp / "arm.urdf").write_text((ROBOTS / "planar_2r.urdf").read_text())
 
-    arm = _reads_or_refuses(lambda p: load_arm(p.with_suffix(".urdf")), data, "arm.json", setup)
+    arm = _reads_or_refuses(lambda p: load_planar_arm(p.with_suffix(".urdf")), data, "arm.json",
+                            setup)
     if arm is not None:
         assert all(math.isfinite(v) for v in np.ravel(arm.fk([0.1, 0.2])))
 

@@ -14,8 +14,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.model import CartesianLimits, JointLimits, load_arm
-from subtask_opt.arm.sequencing import SequencingProblem, solve
+from subtask_opt.arm.model import CartesianLimits, JointLimits, load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE, travel_times
 from subtask_opt.base.errors import NoPathError, ParameterError
@@ -26,7 +26,7 @@ _ARMS: dict = {}
 
 def _arm(name: str):
     if name not in _ARMS:
-        _ARMS[name] = load_arm(name)
+        _ARMS[name] = load_planar_arm(name)
     return _ARMS[name]
 
 
@@ -34,7 +34,7 @@ def _no_jerk(name: str):
     """The robot without jerk limits: its lines are the acceleration-limited optimum."""
     arm = _arm(name)
     jl = arm.joint_limits
-    return load_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
+    return load_planar_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
                                                    jl.acceleration))
 
 
@@ -43,8 +43,9 @@ def _slack_joints(name: str, kw: float = 1e6):
     arm = _arm(name)
     jl = arm.joint_limits
     cl = arm.cartesian_limits
-    return load_arm(name, joint_limits=JointLimits(jl.lower, jl.upper, [1e6, 1e6], [1e6, 1e6]),
-                    cartesian_limits=CartesianLimits(cl.kv, cl.ka, kw, kw))
+    return load_planar_arm(name,
+                           joint_limits=JointLimits(jl.lower, jl.upper, [1e6, 1e6], [1e6, 1e6]),
+                           cartesian_limits=CartesianLimits(cl.kv, cl.ka, kw, kw))
 
 
 @pytest.mark.parametrize("robot", ["planar_2r", "asr_twodof"])
@@ -152,12 +153,12 @@ def test_line_through_the_inner_disc_is_reported_and_replaced_or_excluded() -> N
     assert math.isinf(excl.matrix[0, 1]) and excl.moves()[0, 1] == MOVE_NONE
     # every closed tour of 3 subtasks uses the impossible line
     for configurations in ("fixed", "optimize"):
-        problem = SequencingProblem(s, arm, time_model="line", line_fallback="exclude",
+        problem = PlanarProblem(s, arm, time_model="line", line_fallback="exclude",
                                     configurations=configurations)
         with pytest.raises(NoPathError, match="excluded straight lines"):
             solve(problem, seed=0)
     # the fallback drives it as a joint move and says so
-    result = solve(SequencingProblem(s, arm, time_model="line"), seed=0)
+    result = solve(PlanarProblem(s, arm, time_model="line"), seed=0)
     report = result.report
     assert report is not None and "joint" in report.leg_moves
     assert report.diagnostics["all_pairs_lines"]["n_infeasible_lines"] >= 1

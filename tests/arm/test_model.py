@@ -19,7 +19,7 @@ from subtask_opt.arm.model import (
     Arm,
     CartesianLimits,
     JointLimits,
-    load_arm,
+    load_planar_arm,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 
@@ -30,7 +30,7 @@ CART = CartesianLimits(1.0, 2.0, 3.0, 4.0)
 
 @functools.cache
 def _arm(name: str) -> Arm:
-    return load_arm(name)
+    return load_planar_arm(name)
 
 
 @pytest.fixture(scope="module")
@@ -89,7 +89,7 @@ def test_kernel_parameters_are_a_named_tuple_of_the_arm(arms: dict[str, Arm]) ->
 def test_custom_urdf_with_json_beside(tmp_path: Path) -> None:
     urdf = _custom_urdf(tmp_path)
     shutil.copy(ROBOTS_DIR / "planar_2r.json", tmp_path / "custom.json")
-    arm = load_arm(urdf)
+    arm = load_planar_arm(urdf)
     assert arm.name == "custom"
     assert arm.axis_signs == (1.0, -1.0)
     np.testing.assert_allclose(arm.base_xy, (0.3, -0.2), atol=1e-12)
@@ -100,43 +100,43 @@ def test_custom_urdf_with_json_beside(tmp_path: Path) -> None:
 def test_urdf_without_json_needs_limits(tmp_path: Path) -> None:
     urdf = _custom_urdf(tmp_path)
     with pytest.raises(ParameterError, match="acceleration"):
-        load_arm(urdf)
+        load_planar_arm(urdf)
     with pytest.raises(ParameterError, match="Cartesian limits"):
-        load_arm(urdf, joint_limits=LIMITS)
-    arm = load_arm(urdf, joint_limits=LIMITS, cartesian_limits=CART)
+        load_planar_arm(urdf, joint_limits=LIMITS)
+    arm = load_planar_arm(urdf, joint_limits=LIMITS, cartesian_limits=CART)
     assert arm.cartesian_limits == CART
 
 
 @pytest.mark.parametrize("name", ["planar_3r", "", "ASR_TWODOF"])
 def test_unknown_robot_lists_the_names(name: str) -> None:
     with pytest.raises(ParameterError, match="planar_2r, asr_twodof"):
-        load_arm(name)
+        load_planar_arm(name)
 
 
 def test_bad_robot_files(tmp_path: Path) -> None:
     with pytest.raises(InputDataError, match="not found"):
-        load_arm(tmp_path / "missing.urdf")
+        load_planar_arm(tmp_path / "missing.urdf")
     bad = tmp_path / "bad.urdf"
     bad.write_text("<robot name='x'><link")
     with pytest.raises(InputDataError, match="cannot build"):
-        load_arm(bad, joint_limits=LIMITS, cartesian_limits=CART)
+        load_planar_arm(bad, joint_limits=LIMITS, cartesian_limits=CART)
     urdf = _custom_urdf(tmp_path)
     (tmp_path / "custom.json").write_text('{"joint_limits": {"acceleration": [1, 1]},\n  oops}')
     with pytest.raises(InputDataError, match="line 2"):
-        load_arm(urdf)
+        load_planar_arm(urdf)
     (tmp_path / "custom.json").write_text(
         '{"joint_limits": {"acceleration": [1, 1]}, "cartesian_limits": {"kv": 1, "ka": 0, '
         '"kw": 1, "kw_dot": 1}}')
     with pytest.raises(ParameterError, match="CartesianLimits.ka"):
-        load_arm(urdf)
+        load_planar_arm(urdf)
     with pytest.raises(InputDataError, match="no frame 'nope'"):
-        load_arm(urdf, tip_frame="nope", joint_limits=LIMITS, cartesian_limits=CART)
+        load_planar_arm(urdf, tip_frame="nope", joint_limits=LIMITS, cartesian_limits=CART)
 
 
 def test_non_planar_urdf_rejected(tmp_path: Path) -> None:
     urdf = _custom_urdf(tmp_path, axis2="1 0 0")
     with pytest.raises(InputDataError, match="world z axis"):
-        load_arm(urdf, joint_limits=LIMITS, cartesian_limits=CART)
+        load_planar_arm(urdf, joint_limits=LIMITS, cartesian_limits=CART)
 
 
 @pytest.mark.parametrize("kwargs, field", [
@@ -237,7 +237,7 @@ def test_analytic_fk_and_jacobian_match_pinocchio(arms: dict[str, Arm]) -> None:
 
 
 def test_analytic_kinematics_with_reversed_axis(tmp_path: Path) -> None:
-    arm = load_arm(_custom_urdf(tmp_path, axis1="0 0 -1", axis2="0 0 -1", yaw=-2.0),
+    arm = load_planar_arm(_custom_urdf(tmp_path, axis1="0 0 -1", axis2="0 0 -1", yaw=-2.0),
                    joint_limits=LIMITS, cartesian_limits=CART)
     q = np.array([[0.3, -1.2], [-2.0, 2.2]])
     for qi, fi, ji in zip(q, _k.fk_batch(arm.kinematics, q), _k.jacobian_batch(arm.kinematics, q),

@@ -12,7 +12,7 @@ import pytest
 from subtask_opt.arm.poses import make_targets
 from subtask_opt.arm.scene import Scene
 from subtask_opt.arm.serial import load_serial_arm
-from subtask_opt.arm.serial_problem import SerialProblem, solve_serial
+from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
 from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
 from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
 from tests.conftest import size
@@ -35,7 +35,7 @@ def solved(arm):
     # kernels as Python (coverage): a 90 degree axis step covers the same lines
     targets = make_targets(ROWS, standoff=0.01, axis_step=size(45.0, 90.0))
     problem = SerialProblem(targets, arm, HOME, scene=PANEL)
-    return problem, solve_serial(problem, seed=0)
+    return problem, solve_serial_problem(problem, seed=0).report
 
 
 def test_result_is_consistent_and_executes(solved) -> None:
@@ -63,13 +63,13 @@ def test_answer_is_optimal_over_orders_and_configurations_of_checked_legs(solved
     arm = problem.arm
     targets = make_targets(ROWS[:4], standoff=0.01, axis_step=90.0)
     small = SerialProblem(targets, arm, HOME, check_collisions=False)
-    result = solve_serial(small, seed=3)
+    result = solve_serial_problem(small, seed=3).report
     assert result.planned_time == pytest.approx(_brute_force(small), rel=1e-9)
 
 
 def test_same_seed_same_answer(solved) -> None:
     problem, result = solved
-    again = solve_serial(problem, seed=0)
+    again = solve_serial_problem(problem, seed=0).report
     np.testing.assert_array_equal(again.order, result.order)
     assert again.total_time == result.total_time
 
@@ -154,12 +154,12 @@ def test_blocked_legs_are_avoided_and_the_answer_is_optimal_without_them(arm) ->
     left is the oracle."""
     problem = _small_problem(arm)
     legs_before = problem.legs.copy()
-    free = solve_serial(problem, seed=0)
+    free = solve_serial_problem(problem, seed=0).report
     path = free.tour_configurations()[1:-1]
     blocked = list(zip(path[:-1], path[1:], strict=True))
     checker = _BlockingChecker(blocked)
     object.__setattr__(problem, "checker", checker)
-    result = solve_serial(problem, seed=0)
+    result = solve_serial_problem(problem, seed=0).report
     chosen = result.tour_configurations()[1:-1]
     assert not any(checker.leg_in_collision(a, b, 0.01)
                    for a, b in zip(chosen[:-1], chosen[1:], strict=True))
@@ -175,7 +175,7 @@ def test_blocked_legs_are_avoided_and_the_answer_is_optimal_without_them(arm) ->
     assert result.planned_time > free.planned_time
     # the blocked legs were restored
     np.testing.assert_array_equal(problem.legs, legs_before)
-    again = solve_serial(problem, seed=0)
+    again = solve_serial_problem(problem, seed=0).report
     np.testing.assert_array_equal(again.order, result.order)
     np.testing.assert_array_equal(again.configuration_index, result.configuration_index)
 
@@ -189,7 +189,7 @@ def test_no_collision_free_tour_raises_and_restores_the_legs(arm) -> None:
     object.__setattr__(problem, "checker", _BlockingChecker(
         [(qa, qb) for qa in a for qb in b]))
     with pytest.raises(NoPathError, match="no tour avoids the legs in collision"):
-        solve_serial(problem, seed=0)
+        solve_serial_problem(problem, seed=0)
     np.testing.assert_array_equal(problem.legs, legs_before)
 
 
@@ -198,12 +198,12 @@ def test_bad_kicks_name_the_value(solved, kicks) -> None:
     problem, _ = solved
     with pytest.raises(ParameterError, match=rf"kicks must be an integer in \[0, 1000\], "
                                              rf"got {kicks!r}"):
-        solve_serial(problem, kicks=kicks)
+        solve_serial_problem(problem, kicks=kicks)
 
 
 def test_kicks_zero_still_reaches_the_optimum(arm) -> None:
     problem = _small_problem(arm)
-    result = solve_serial(problem, seed=1, kicks=0)
+    result = solve_serial_problem(problem, seed=1, kicks=0).report
     assert result.planned_time == pytest.approx(_brute_force(problem), rel=1e-9)
 
 
@@ -214,10 +214,10 @@ def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> N
 
     monkeypatch.setattr(serial_problem, "MAX_ROUNDS", 1)
     problem = _small_problem(arm)
-    path = solve_serial(problem, seed=0).tour_configurations()[1:-1]
+    path = solve_serial_problem(problem, seed=0).report.tour_configurations()[1:-1]
     checker = _BlockingChecker(list(zip(path[:-1], path[1:], strict=True)))
     object.__setattr__(problem, "checker", checker)
-    result = solve_serial(problem, seed=0)
+    result = solve_serial_problem(problem, seed=0).report
     assert result.counts["ga_rounds"] == 1
     assert result.counts["search_rounds"] >= 2
     chosen = result.tour_configurations()
@@ -230,7 +230,7 @@ def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> N
     object.__setattr__(blocked, "checker", _BlockingChecker(
         [(qa, qb) for qa in a for qb in b]))
     with pytest.raises(NoPathError, match="still in the best tour after 1 searches"):
-        solve_serial(blocked, seed=0)
+        solve_serial_problem(blocked, seed=0)
 
 
 def test_cpu_split_reports_compilation_apart(solved) -> None:

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.model import ROBOT_NAMES, Arm, load_arm
+from subtask_opt.arm.model import ROBOT_NAMES, Arm, load_planar_arm
 from subtask_opt.arm.tasks import (
     CASE_NAMES,
     SubtaskSet,
@@ -27,7 +27,7 @@ PTS = np.array([[0.1, 0.2], [0.3, -0.1], [0.25, 0.05], [0.15, 0.12]])
 
 @functools.cache
 def _arm(name: str) -> Arm:
-    return load_arm(name)
+    return load_planar_arm(name)
 
 
 # ---------------------------------------------------------------- validation

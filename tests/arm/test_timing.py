@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_arm
+from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_planar_arm
 from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
 from subtask_opt.arm.timing.models import (
     MOVE_LINE,
@@ -28,7 +28,7 @@ from tests.conftest import examples, size
 
 @functools.cache
 def _arm(name: str) -> Arm:
-    return load_arm(name)
+    return load_planar_arm(name)
 
 
 def _wrap(a: float) -> float:
@@ -160,7 +160,7 @@ def test_joint_model_matches_ruckig(robot: str, jerk: bool) -> None:
     arm = _arm(robot)
     if not jerk and arm.joint_limits.jerk is not None:
         jl = arm.joint_limits
-        arm = load_arm(robot, joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
+        arm = load_planar_arm(robot, joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
                                                        jl.acceleration, None))
     s = random_subtasks(arm, 5, seed=7)
     for elbow in (0, 1):
@@ -355,7 +355,7 @@ def test_leg_check_flags_impossible_lines() -> None:
     assert np.isinf(lc.speed_ratio[0, 1]) and np.isfinite(lc.speed_ratio[0, 3])
     # Joint 1 wide open: the line behind the base becomes drivable, the disc does not.
     jl = arm.joint_limits
-    wide = load_arm("asr_twodof", joint_limits=JointLimits([-7.0, -3.14], [7.0, 3.14],
+    wide = load_planar_arm("asr_twodof", joint_limits=JointLimits([-7.0, -3.14], [7.0, 3.14],
                                                            jl.velocity, jl.acceleration))
     lw = travel_times(s, wide).leg_check
     assert lw.outside_annulus[0, 1] and not lw.outside_annulus[2, 4]
@@ -386,7 +386,7 @@ def test_leg_check_summary_and_json() -> None:
     assert all(r > 1 for _, _, r in data["overspeed"])
     assert "straight legs impossible" in lc.summary()
     # Slow enough Cartesian limits: no leg overspeeds.
-    slow = load_arm("asr_twodof", cartesian_limits=CartesianLimits(0.001, 0.2, 0.01, 2.0))
+    slow = load_planar_arm("asr_twodof", cartesian_limits=CartesianLimits(0.001, 0.2, 0.01, 2.0))
     assert travel_times(s, slow).leg_check.n_overspeed == 0
 
 

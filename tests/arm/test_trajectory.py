@@ -9,8 +9,8 @@ matplotlib.use("Agg")
 import numpy as np
 import pytest
 
-from subtask_opt.arm.model import JointLimits, load_arm
-from subtask_opt.arm.sequencing import SequencingProblem, solve
+from subtask_opt.arm.model import JointLimits, load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
 from subtask_opt.arm.trajectory import (
     CSV_HEADER,
@@ -19,6 +19,7 @@ from subtask_opt.arm.trajectory import (
     validate_trajectory,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.problem import MatrixProblem
 from tests.conftest import REDUCED, size
 
 _ARMS: dict = {}
@@ -26,7 +27,7 @@ _ARMS: dict = {}
 
 def _arm(name: str):
     if name not in _ARMS:
-        _ARMS[name] = load_arm(name)
+        _ARMS[name] = load_planar_arm(name)
     return _ARMS[name]
 
 
@@ -36,7 +37,7 @@ def _solved(robot: str, case: str, model: str):
     subtasks = builtin_case(case, arm, seed=0)
     if REDUCED:  # the first 5 subtasks of the case: the same kinds of legs, fewer of them
         subtasks = SubtaskSet(subtasks.points[:5], name=subtasks.name)
-    problem = SequencingProblem(subtasks, arm, time_model=model, configurations=configurations)
+    problem = PlanarProblem(subtasks, arm, time_model=model, configurations=configurations)
     return problem, solve(problem, seed=0)
 
 
@@ -144,10 +145,10 @@ def test_validator_catches_the_jerk_of_an_acceleration_limited_tour() -> None:
     # limits; the validator must see it, and the jerk-limited trajectory must pass
     arm = _arm("planar_2r")
     jl = arm.joint_limits
-    free = load_arm("planar_2r", joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
+    free = load_planar_arm("planar_2r", joint_limits=JointLimits(jl.lower, jl.upper, jl.velocity,
                                                           jl.acceleration))
     problem, result = _solved("planar_2r", "square20", "line")
-    free_problem = SequencingProblem(problem.subtasks, free, time_model="line",
+    free_problem = PlanarProblem(problem.subtasks, free, time_model="line",
                                      configurations="optimize")
     free_result = solve(free_problem, seed=0)
     jerky = tour_trajectory(free_problem, free_result)
@@ -194,7 +195,7 @@ def test_validator_reports_exceeded_limits() -> None:
     problem, result = _solved("asr_twodof", "square20", "joint")
     trajectory = tour_trajectory(problem, result)
     jl = trajectory.arm.joint_limits
-    slower = load_arm("asr_twodof", joint_limits=JointLimits(
+    slower = load_planar_arm("asr_twodof", joint_limits=JointLimits(
         jl.lower, jl.upper, jl.velocity / 2, jl.acceleration / 2))
     strict = TourTrajectory(slower, trajectory.legs, trajectory.predicted_time, "joint")
     report = validate_trajectory(strict, dt=5e-3)
@@ -202,14 +203,14 @@ def test_validator_reports_exceeded_limits() -> None:
     text = " ".join(report.violations)
     assert "velocity limit exceeded" in text and "acceleration limit exceeded" in text
     assert "INVALID" in report.summary()
-    narrow = load_arm("asr_twodof", joint_limits=JointLimits(
+    narrow = load_planar_arm("asr_twodof", joint_limits=JointLimits(
         jl.lower / 10, jl.upper / 10, jl.velocity, jl.acceleration))
     report = validate_trajectory(TourTrajectory(narrow, trajectory.legs, 1.0, "joint"), dt=5e-3)
     assert any("position limit" in v for v in report.violations)
 
 
 def test_trajectory_needs_an_arm() -> None:
-    problem = SequencingProblem.from_matrix(np.ones((4, 4)) - np.eye(4))
+    problem = MatrixProblem(np.ones((4, 4)) - np.eye(4))
     result = solve(problem, seed=0)
     with pytest.raises(ParameterError, match="arm"):
         tour_trajectory(problem, result)
@@ -223,7 +224,7 @@ def test_figures_and_animation(tmp_path) -> None:
     )
 
     arm = _arm("planar_2r")
-    problem = SequencingProblem(random_subtasks(arm, 6, seed=0), arm, time_model="line",
+    problem = PlanarProblem(random_subtasks(arm, 6, seed=0), arm, time_model="line",
                                 configurations="optimize")
     result = solve(problem, seed=0)
     trajectory = tour_trajectory(problem, result)
@@ -294,7 +295,7 @@ def test_solution_figure(tmp_path, n: int) -> None:
     from subtask_opt.plotting.sequencing import save_solution_figure, solution_figure
 
     arm = _arm("planar_2r")
-    problem = SequencingProblem(random_subtasks(arm, n, seed=2), arm, time_model="joint",
+    problem = PlanarProblem(random_subtasks(arm, n, seed=2), arm, time_model="joint",
                                 configurations="optimize")
     result = solve(problem, seed=0)
     fig = solution_figure(result, problem)

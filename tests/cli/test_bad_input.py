@@ -21,6 +21,7 @@ import pytest
 
 from subtask_opt.base.errors import InputDataError, ParameterError, SubtaskOptError
 from subtask_opt.cli import main
+from subtask_opt.tour.problem import MatrixProblem
 
 SUBTASKS = "x,y\n0.30,0.10\n0.35,0.22\n0.25,0.30\n0.40,0.05\n"
 FAST = ["--max-generations", "3", "--no-progress", "--quiet"]
@@ -123,23 +124,28 @@ def test_api_numbers_given_as_strings(part):
 
 
 def test_api_solve_with_params_as_a_name(part):
-    from subtask_opt import SequencingProblem, load_arm, load_subtasks, solve
+    from subtask_opt import solve
+    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.arm.tasks import load_subtasks
 
-    problem = SequencingProblem(load_subtasks(part), load_arm("planar_2r"))
+    problem = PlanarProblem(load_subtasks(part), load_planar_arm("planar_2r"))
     with pytest.raises(SubtaskOptError, match="params"):
         solve(problem, params="default")  # type: ignore[arg-type]
 
 
 def test_api_problem_with_the_arm_as_a_name(part):
-    from subtask_opt import SequencingProblem, load_arm, load_subtasks
+    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.arm.tasks import load_subtasks
 
     subtasks = load_subtasks(part)
     try:
-        by_name = SequencingProblem(subtasks, "planar_2r")  # type: ignore[arg-type]
+        by_name = PlanarProblem(subtasks, "planar_2r")  # type: ignore[arg-type]
     except SubtaskOptError as exc:  # refused: it must say what to do instead
-        assert "load_arm" in str(exc)
+        assert "load_planar_arm" in str(exc)
         return
-    by_object = SequencingProblem(subtasks, load_arm("planar_2r"))
+    by_object = PlanarProblem(subtasks, load_planar_arm("planar_2r"))
     np.testing.assert_array_equal(by_name.matrix, by_object.matrix)
 
 
@@ -281,10 +287,10 @@ def test_complex_subtasks():
 
 
 def test_matrix_problem_of_1e308():
-    from subtask_opt import MaxGenerations, SequencingProblem, solve
+    from subtask_opt import MaxGenerations, solve
 
     try:
-        problem = SequencingProblem.from_matrix(np.full((4, 4), 1e308))
+        problem = MatrixProblem(np.full((4, 4), 1e308))
     except SubtaskOptError as exc:
         assert "matrix" in str(exc)
         return
@@ -319,9 +325,9 @@ def test_obstacle_vertex_touching_the_boundary_closes_the_gap(planner, tmp_path,
 
 
 def test_arm_fk_from_eight_threads():
-    from subtask_opt import load_arm
+    from subtask_opt.arm.model import load_planar_arm
 
-    arm = load_arm("planar_2r")
+    arm = load_planar_arm("planar_2r")
     qs = np.random.default_rng(5).uniform(-2.5, 2.5, size=(2000, 2))
     expected = np.array([arm.fk(q) for q in qs])
     results: list[np.ndarray | None] = [None] * 8

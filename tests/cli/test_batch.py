@@ -6,7 +6,9 @@ import json
 
 import pytest
 
-from subtask_opt import SequencingProblem, load_arm, solve
+from subtask_opt import solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import builtin_case, random_subtasks, save_subtasks
 from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.batch.pool import dask_available
@@ -17,7 +19,7 @@ GENERATIONS = 30
 
 @pytest.fixture(scope="module")
 def arm():
-    return load_arm("planar_2r")
+    return load_planar_arm("planar_2r")
 
 
 @pytest.fixture
@@ -39,7 +41,7 @@ def _run(argv, capsys):
 
 
 def _solve(subtasks, arm, time_model, seed):
-    problem = SequencingProblem(subtasks, arm, time_model=time_model)
+    problem = PlanarProblem(subtasks, arm, time_model=time_model)
     return solve(problem, seed=seed, stop=MaxGenerations(GENERATIONS))
 
 

@@ -11,7 +11,7 @@ import json
 
 import pytest
 
-from subtask_opt import load_arm
+from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.cli import main
 
 SEEDED = [
@@ -85,7 +85,7 @@ def test_a_missing_input_is_refused_in_one_line(argv, tmp_path, capsys):
 
 
 def test_solve_that_finds_no_tour_exits_1(tmp_path, capsys):
-    arm = load_arm("asr_twodof")
+    arm = load_planar_arm("asr_twodof")
     bx, by = arm.base_xy
     r = 0.5 * (arm.r_min + arm.r_max)
     csv = tmp_path / "disc.csv"  # every tour needs a straight line through the inner disc

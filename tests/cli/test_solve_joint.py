@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from subtask_opt.arm.model import load_arm
+from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.tasks import builtin_case
 from subtask_opt.cli.app import main
 from tests.conftest import REDUCED
@@ -18,8 +18,8 @@ def _case(tmp_path, case: str, robot: str, keep) -> tuple[str, int]:
     ``keep(points, arm)`` selects: the same command on a few subtasks. Returns the
     ``--case`` argument and the number of subtasks."""
     if not REDUCED:
-        return case, len(builtin_case(case, load_arm(robot)).points)
-    arm = load_arm(robot)
+        return case, len(builtin_case(case, load_planar_arm(robot)).points)
+    arm = load_planar_arm(robot)
     pts = builtin_case(case, arm).points
     pts = pts[keep(pts, arm)]
     csv = tmp_path / f"{case}_reduced.csv"
@@ -65,7 +65,7 @@ def test_joint_model_chooses_configurations_and_writes_trajectory(tmp_path, caps
 
 def _disc_crossing_csv(tmp_path):
     """Three asr_twodof subtasks; the line between the first two crosses the inner disc."""
-    arm = load_arm("asr_twodof")
+    arm = load_planar_arm("asr_twodof")
     bx, by = arm.base_xy
     r = 0.5 * (arm.r_min + arm.r_max)
     csv = tmp_path / "through_the_disc.csv"
@@ -125,7 +125,7 @@ def test_user_mistakes_print_one_line_and_exit_2(extra, needle, tmp_path, capsys
 
 
 def test_excluded_lines_without_a_tour_and_unreachable_subtasks_exit_2(tmp_path, capsys):
-    arm = load_arm("asr_twodof")
+    arm = load_planar_arm("asr_twodof")
     bx, by = arm.base_xy
     r = 0.5 * (arm.r_min + arm.r_max)
     assert main(["solve", "--case", str(_disc_crossing_csv(tmp_path)), "--robot", "asr_twodof",

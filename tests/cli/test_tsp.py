@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from subtask_opt.arm.tsplib import parse_tsplib
 from subtask_opt.cli.app import main
-from tests.arm.test_tsplib import BURMA14, BURMA14_OPT, GR17, GR17_OPT
+from subtask_opt.tour.tsplib import parse_tsplib
+from tests.tour.test_tsplib import BURMA14, BURMA14_OPT, GR17, GR17_OPT
 from tests.conftest import SHARED_DATA
 
 

@@ -7,10 +7,11 @@ import pytest
 
 from subtask_opt.base.errors import ParameterError
 from subtask_opt.base.stop import MaxGenerations, MaxRuntime, NoImprovement, TargetCost
+from subtask_opt.chromosomes import use
 from subtask_opt.ga.config import GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import run_ga
-from subtask_opt.ga.permutation import SEARCH_FAST, SEARCH_PAPER, make_aux, neighbour_table
+from subtask_opt.tour.permutation import SEARCH_FAST, SEARCH_PAPER, make_aux, neighbour_table
 
 
 def _matrix(seed: int = 0, n: int = 12) -> np.ndarray:
@@ -21,8 +22,8 @@ def _matrix(seed: int = 0, n: int = 12) -> np.ndarray:
 def _run(search=SEARCH_PAPER, seed=0, criteria=None, config=None, m=None, runs=1):
     m = _matrix() if m is None else m
     aux = make_aux(neighbour_table(m), nearest_fallback=search != SEARCH_PAPER, search=search)
-    return run_ga(Kind.PERMUTATION, config or GAConfig(), m, aux, max_genes=m.shape[0], seed=seed,
-                  criteria=criteria or [MaxGenerations(150)], runs=runs)
+    return run_ga(use(Kind.PERMUTATION), config or GAConfig(), m, aux, max_genes=m.shape[0],
+                  seed=seed, criteria=criteria or [MaxGenerations(150)], runs=runs)
 
 
 def test_same_seed_same_outcome():

@@ -8,15 +8,18 @@ import itertools
 import numpy as np
 import pytest
 
-from subtask_opt import SequencingProblem, SolverParams, solve
-from subtask_opt.arm.exact import held_karp, milp_optimum, optimal_tours, tour_length
-from subtask_opt.arm.sequencing import PAPER_LOOP
+from subtask_opt import SolverParams, solve
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.base.errors import ParameterError, SubtaskOptError
 from subtask_opt.base.stop import MaxGenerations
+from subtask_opt.chromosomes import use
 from subtask_opt.ga.config import CONVERGENCE_TESTS, CROSSOVER_STARTS, PAIRINGS, GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import _draw_mates, _edges_converged, _rotate_to, run_ga
-from subtask_opt.ga.permutation import make_aux, neighbour_table
+from subtask_opt.tour.exact import held_karp, milp_optimum, optimal_tours, tour_length
+from subtask_opt.tour.permutation import make_aux, neighbour_table
+from subtask_opt.tour.problem import MatrixProblem
+from subtask_opt.tour.solve import PAPER_LOOP
 
 highspy = pytest.importorskip("highspy")
 
@@ -60,7 +63,7 @@ def test_every_reading_is_reproducible_and_returns_a_tour(config):
     aux = make_aux(neighbour_table(m), nearest_fallback=False)
 
     def run(seed):
-        return run_ga(Kind.PERMUTATION, config, m, aux, max_genes=11, seed=seed,
+        return run_ga(use(Kind.PERMUTATION), config, m, aux, max_genes=11, seed=seed,
                       criteria=[MaxGenerations(200)])
 
     a, b = run(4), run(4)
@@ -172,7 +175,7 @@ def test_paper_preset_runs_the_paper_loop_and_only_it():
 
 
 def test_the_paper_preset_runs_paper_loop_with_its_population():
-    problem = SequencingProblem.from_matrix(_random_matrix(6, 12))
+    problem = MatrixProblem(_random_matrix(6, 12))
     stop = MaxGenerations(40)
     implicit = solve(problem, seed=2, params=SolverParams(preset="paper"), stop=stop)
     explicit = solve(problem, seed=2, params=SolverParams(preset="paper", paper_loop=PAPER_LOOP),
@@ -186,7 +189,7 @@ def test_the_paper_preset_runs_paper_loop_with_its_population():
 
 
 def test_paper_loop_option_changes_the_search_and_is_reproducible():
-    problem = SequencingProblem.from_matrix(_random_matrix(5, 14))
+    problem = MatrixProblem(_random_matrix(5, 14))
     stop = MaxGenerations(60)
     rest = SolverParams(preset="paper", paper_loop=GAConfig(pairing="rest"))
     a = solve(problem, seed=1, params=rest, stop=stop)
@@ -202,7 +205,7 @@ def test_paper_loop_option_changes_the_search_and_is_reproducible():
 def test_paper_preset_finds_the_held_karp_optimum_of_a_small_instance(seed):
     m = _random_matrix(10 + seed, 9)
     optimum, _ = held_karp(m)
-    r = solve(SequencingProblem.from_matrix(m), seed=seed, params=SolverParams(preset="paper"),
+    r = solve(MatrixProblem(m), seed=seed, params=SolverParams(preset="paper"),
               stop=MaxGenerations(3000))
     assert r.total_time == pytest.approx(optimum, rel=1e-12)
 
@@ -313,10 +316,11 @@ def _check_cut_excluded_resolves(m, found, tours):
 
 @pytest.fixture(scope="module")
 def square20_paper_matrix():
-    from subtask_opt import builtin_case, load_arm
+    from subtask_opt import builtin_case
+    from subtask_opt.arm.model import load_planar_arm
 
-    arm = load_arm("planar_2r")
-    return SequencingProblem(builtin_case("square20", arm), arm, time_model="paper").matrix
+    arm = load_planar_arm("planar_2r")
+    return PlanarProblem(builtin_case("square20", arm), arm, time_model="paper").matrix
 
 
 def test_optimal_tours_validates_and_caps():
@@ -337,11 +341,12 @@ def test_optimal_tours_figure_has_a_labelled_panel_per_tour(tmp_path, square20_p
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from subtask_opt import builtin_case, load_arm
+    from subtask_opt import builtin_case
+    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.plotting.sequencing import optimal_tours_figure, save_optimal_tours_figure
 
-    arm = load_arm("planar_2r")
-    problem = SequencingProblem(builtin_case("square20", arm), arm, time_model="paper")
+    arm = load_planar_arm("planar_2r")
+    problem = PlanarProblem(builtin_case("square20", arm), arm, time_model="paper")
     found = optimal_tours(problem.matrix)
     panels = [(problem, found.tours[0], "optimum"), (problem, np.arange(20), "input order")]
     fig = optimal_tours_figure(panels, title="square20 optima")

@@ -14,20 +14,106 @@ from subtask_opt.base.errors import ParameterError
 from subtask_opt.ga import dispatch
 from subtask_opt.ga.kinds import TAGS, Kind
 
-GA_DIR = Path(subtask_opt.__file__).parent / "ga"
-DOMAINS = ("subtask_opt.arm", "subtask_opt.planners", "subtask_opt.plotting", "subtask_opt.cli")
+PACKAGE = Path(subtask_opt.__file__).parent
+GA_DIR = PACKAGE / "ga"
+ABOVE_GA = ("subtask_opt.tour", "subtask_opt.chromosomes", "subtask_opt.arm",
+            "subtask_opt.planners", "subtask_opt.plotting", "subtask_opt.cli",
+            "subtask_opt.batch", "subtask_opt.papers")
+LAYERS = {"base": 0, "_kernel_cache": 0, "ga": 1, "chromosomes": 2, "tour": 3, "arm": 4,
+          "planners": 4, "plotting": 5, "batch": 6, "papers": 6, "cli": 7}
+"""The package's layers: a module may import from its own layer or a lower one only
+(``chromosomes`` is the composition root of the GA's kinds; it imports its kinds' modules
+lazily, when a caller asks for one)."""
 
 
 def test_every_kind_has_all_five_operators() -> None:
-    import subtask_opt.arm._configuration_kernels  # noqa: F401  (registers its kind)
-    import subtask_opt.planners.grid._waypoint_kernels  # noqa: F401  (registers its kind)
+    from subtask_opt.chromosomes import SOURCES, use
 
-    assert set(TAGS) == set(Kind)
+    assert set(TAGS) == set(Kind) == set(SOURCES)
     for kind in Kind:
-        ops = dispatch.registered(kind)
+        ops = dispatch.registered(use(kind))
         assert ops is not None, kind
         for name in dispatch.OPERATOR_NAMES:
             assert callable(getattr(ops, name)), (kind, name)
+
+
+def test_importing_a_kernel_module_registers_nothing() -> None:
+    code = ("import subtask_opt.tour.permutation, subtask_opt.tour.precedence, "
+            "subtask_opt.tour.clustered, subtask_opt.planners.grid._waypoint_kernels\n"
+            "from subtask_opt.ga import dispatch\n"
+            "from subtask_opt.ga.kinds import Kind\n"
+            "print([k.name for k in Kind if dispatch.registered(k) is not None])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
+
+
+def _imports(path: Path) -> list[str]:
+    """Every ``subtask_opt`` module ``path`` imports, at any depth of its code (lazy
+    imports inside functions included; ``if TYPE_CHECKING`` blocks left out)."""
+    tree = ast.parse(path.read_text())
+    skipped: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            skipped |= {id(n) for n in ast.walk(node)}
+    names = []
+    for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.append(node.module)
+        elif isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+    return [n for n in names if n.startswith("subtask_opt.")]
+
+
+def _layer(module: str) -> int | None:
+    return LAYERS.get(module.split(".")[1])
+
+
+def test_dependencies_point_one_way() -> None:
+    wrong = []
+    for path in PACKAGE.rglob("*.py"):
+        own = path.relative_to(PACKAGE).parts[0].removesuffix(".py")
+        if own not in LAYERS:
+            continue
+        for name in _imports(path):
+            layer = _layer(name)
+            if layer is not None and layer > LAYERS[own]:
+                wrong.append(f"{path.relative_to(PACKAGE)} imports {name}")
+    assert not wrong, "\n".join(sorted(set(wrong)))
+
+
+def test_no_module_level_import_circle() -> None:
+    """The graph of module-level imports between the package's modules has no cycle."""
+    modules = {".".join(("subtask_opt", *p.relative_to(PACKAGE).with_suffix("").parts))
+               .removesuffix(".__init__"): p for p in PACKAGE.rglob("*.py")}
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text())
+        targets = set()
+        for node in tree.body:  # module level only: a lazy import cannot close a circle
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                for a in node.names:
+                    full = f"{node.module}.{a.name}"
+                    targets.add(full if full in modules else node.module)
+            elif isinstance(node, ast.Import):
+                targets |= {a.name for a in node.names}
+        graph[name] = {t for t in targets if t in modules and t != name}
+    state: dict[str, int] = {}
+
+    def visit(node: str, trail: list[str]) -> None:
+        state[node] = 1
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                raise AssertionError("import circle: " + " -> ".join([*trail, node, nxt]))
+            if nxt not in state:
+                visit(nxt, [*trail, node])
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [])
 
 
 def test_registering_an_incomplete_operator_set_is_refused() -> None:
@@ -38,17 +124,10 @@ def test_registering_an_incomplete_operator_set_is_refused() -> None:
         dispatch.register(0, dispatch.registered(Kind.PERMUTATION))  # type: ignore[arg-type]
 
 
-def test_nothing_under_ga_imports_a_domain() -> None:
+def test_nothing_under_ga_imports_a_tour_or_a_domain() -> None:
     for path in GA_DIR.glob("*.py"):
-        tree = ast.parse(path.read_text())
-        for node in ast.walk(tree):
-            names = []
-            if isinstance(node, ast.ImportFrom) and node.module:
-                names = [node.module]
-            elif isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            for name in names:
-                assert not name.startswith(DOMAINS), f"{path.name} imports {name}"
+        for name in _imports(path):
+            assert not name.startswith(ABOVE_GA), f"{path.name} imports {name}"
 
 
 def test_importing_the_package_loads_no_planner() -> None:

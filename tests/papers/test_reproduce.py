@@ -123,8 +123,8 @@ def test_optimal_tours_finds_every_optimum_against_brute_force():
 
     import numpy as np
 
-    from subtask_opt.arm.exact import milp_optimum, tour_length
     from subtask_opt.papers.p002_sequencing import canonical, optimal_tours
+    from subtask_opt.tour.exact import milp_optimum, tour_length
 
     tours = {canonical(np.array((0, *p))) for p in itertools.permutations(range(1, 5))}
     for top, expected in (((0.5, 2.0), 1), ((0.0, 1.0), 2)):

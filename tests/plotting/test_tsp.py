@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from subtask_opt.arm.tsplib import TspSolution, parse_tsplib
 from subtask_opt.plotting.tsp import plot_tour, save_tour_figure
+from subtask_opt.tour.tsplib import TspSolution, parse_tsplib
 from tests.arm.test_tsplib import BURMA14, GR17
 
 

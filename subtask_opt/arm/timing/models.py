@@ -35,7 +35,7 @@ Four models (:data:`TIME_MODELS`):
 
 For ``joint`` and ``line`` the result also holds the times between every pair
 of *configurations* (:attr:`TimingResult.branch_times`), from which
-:mod:`subtask_opt.arm.configurations` chooses one elbow branch per subtask.
+:mod:`subtask_opt.tour.configurations` chooses one elbow branch per subtask.
 
 The Cartesian models drive a straight line that the arm may not be able to
 follow: :class:`LegCheck` reports the legs that leave the workspace of their
@@ -52,7 +52,6 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.arm import _kinematics_kernels as _k
-from subtask_opt.arm.configurations import gather
 from subtask_opt.arm.model import BRANCH_NAMES, Arm
 from subtask_opt.arm.tasks import SubtaskSet
 from subtask_opt.arm.timing import _line_kernels as _lk
@@ -64,6 +63,7 @@ from subtask_opt.base.errors import (
     require_non_negative,
     require_positive,
 )
+from subtask_opt.tour.configurations import gather
 
 TIME_MODELS: tuple[str, ...] = ("paper", "trapezoid", "joint", "line")
 LINE_FALLBACKS: tuple[str, ...] = ("joint", "exclude")

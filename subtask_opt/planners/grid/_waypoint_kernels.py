@@ -35,8 +35,7 @@ import numpy as np
 from numba import njit
 
 from subtask_opt.base.errors import ParameterError
-from subtask_opt.ga.dispatch import OperatorSet, register
-from subtask_opt.ga.kinds import Kind
+from subtask_opt.ga.dispatch import OperatorSet
 from subtask_opt.planners.grid._kernels import segment_hits
 
 INIT_RANDOM = 0
@@ -367,5 +366,6 @@ def shortcut(genes, length, data, aux):
     return length
 
 
-register(Kind.WAYPOINT_PATH,
-         OperatorSet(random_path, path_cost, one_point_crossover, nonuniform_mutation, shortcut))
+OPERATORS = OperatorSet(random_path, path_cost, one_point_crossover, nonuniform_mutation,
+                        shortcut)
+"""The waypoint path kind's operators (registered by :mod:`subtask_opt.chromosomes`)."""

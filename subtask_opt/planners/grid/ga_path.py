@@ -36,6 +36,7 @@ from subtask_opt.base.errors import ParameterError, require_int, require_positiv
 from subtask_opt.base.geometry import polyline_length
 from subtask_opt.base.results import Outcome, PlanResult
 from subtask_opt.base.stop import MaxGenerations, NoImprovement, StoppingCriterion, as_criteria
+from subtask_opt.chromosomes import use
 from subtask_opt.ga.config import GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import run_ga
@@ -181,7 +182,7 @@ def plan(world: GridWorld, start: Any, goal: Any, *, params: GAPathParams | None
     aux = wp.make_aux(start_xy, goal_xy, penalty=params.penalty,
                       init=wp.INIT_VISIBILITY if params.init == "visibility" else wp.INIT_RANDOM,
                       init_tries=params.init_tries, shortcut=params.shortcut)
-    out = run_ga(Kind.WAYPOINT_PATH, params.config(), data, aux, max_genes=params.max_genes,
+    out = run_ga(use(Kind.WAYPOINT_PATH), params.config(), data, aux, max_genes=params.max_genes,
                  seed=seed_value, criteria=criteria)
     runtime = time.perf_counter() - t0
     w = world.width

@@ -11,19 +11,20 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.constraints import (
+from subtask_opt.arm.planar_problem import PlanarProblem, solve
+from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.constraints import (
     TourConstraints,
     canonical,
     find_cycle,
     read_precedence,
 )
-from subtask_opt.arm.exact import (
+from subtask_opt.tour.exact import (
     exact_constrained,
     held_karp_pinned,
     milp_pinned,
 )
-from subtask_opt.arm.sequencing import MatrixProblem, SequencingProblem, solve
-from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.problem import MatrixProblem
 
 VARIANTS = ("closed", "open_free", "open_fixed", "home")
 
@@ -237,10 +238,10 @@ def test_the_open_path_transform_costs_exactly_the_path() -> None:
 
 @pytest.fixture(scope="module")
 def arm_problem():
-    from subtask_opt.arm.model import load_arm
+    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import random_subtasks
 
-    arm = load_arm("planar_2r")
+    arm = load_planar_arm("planar_2r")
     subtasks = random_subtasks(arm, 7, seed=3)
     return arm, subtasks
 
@@ -252,10 +253,10 @@ def test_arm_home_point_matches_brute_force(arm_problem) -> None:
     home = (0.35, -0.05)
     assert arm.reachable(home)
     c = TourConstraints(home=home, precedence=[(0, 4), (4, 2)])
-    problem = SequencingProblem(subtasks, arm, time_model="trapezoid")
+    problem = PlanarProblem(subtasks, arm, time_model="trapezoid")
     result = solve(problem, seed=2, constraints=c)
     # the oracle: the same arm problem with the home built as an 8th row by hand
-    with_home = SequencingProblem(SubtaskSet(np.vstack([subtasks.points, home])), arm,
+    with_home = PlanarProblem(SubtaskSet(np.vstack([subtasks.points, home])), arm,
                                   time_model="trapezoid")
     as_matrix = TourConstraints(home=7, precedence=c.precedence)
     assert result.total_time == pytest.approx(brute_force(with_home.matrix, as_matrix),
@@ -267,7 +268,7 @@ def test_arm_home_point_matches_brute_force(arm_problem) -> None:
 def test_arm_open_path_with_optimized_configurations_keeps_constraints(arm_problem) -> None:
     arm, subtasks = arm_problem
     c = TourConstraints(tour="open", start=1, end=5, precedence=[(3, 0)])
-    result = solve(SequencingProblem(subtasks, arm), seed=0, constraints=c)
+    result = solve(PlanarProblem(subtasks, arm), seed=0, constraints=c)
     assert result.order[0] == 1 and result.order[-1] == 5
     pos = {int(v): k for k, v in enumerate(result.order)}
     assert pos[3] < pos[0]
@@ -278,7 +279,7 @@ def test_arm_open_path_with_optimized_configurations_keeps_constraints(arm_probl
 def test_unreachable_home_is_refused(arm_problem) -> None:
     arm, subtasks = arm_problem
     with pytest.raises(InputDataError, match=r"home point \(5, 5\) is unreachable: is beyond"):
-        solve(SequencingProblem(subtasks, arm, time_model="trapezoid"),
+        solve(PlanarProblem(subtasks, arm, time_model="trapezoid"),
               constraints=TourConstraints(home=(5.0, 5.0)))
 
 
@@ -290,9 +291,19 @@ def test_a_precedence_cycle_is_named() -> None:
     assert find_cycle([(0, 1), (1, 2)]) is None
 
 
+def test_a_closed_tour_ends_at_a_chosen_subtask_only_before_a_home() -> None:
+    # the problem's own home (a serial arm) or the constraints'
+    with pytest.raises(ParameterError, match="end=3 needs tour='open' or a home"):
+        TourConstraints(end=3).check_size(5, matrix_home=True)
+    TourConstraints(end=3).check_size(5, matrix_home=True, own_home=True)
+    m = np.arange(36, dtype=float).reshape(6, 6)
+    canon = canonical(m, TourConstraints(end=3, home=5), default_start=0)
+    assert canon.first == 5 and canon.last == -1
+    assert {(v, 3) for v in (0, 1, 2, 4)} <= {tuple(p) for p in canon.pairs.tolist()}
+
+
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"tour": "circle"}, "tour must be one of closed, open"),
-    ({"end": 3}, "end=3 needs tour='open'"),
     ({"tour": "open", "start": 2, "end": 2}, "from subtask 2 to itself"),
     ({"tour": "open", "home": 1}, "home needs tour='closed'"),
     ({"home": 1, "start": 2}, "home and start=2 contradict"),
@@ -343,8 +354,8 @@ def test_read_precedence(tmp_path) -> None:
 
 @pytest.mark.parametrize("end", [None, 4])
 def test_symmetric_path_matrix_turns_the_best_path_into_the_best_tour(end) -> None:
-    from subtask_opt.arm.constraints import symmetric_path_matrix
-    from subtask_opt.arm.exact import held_karp
+    from subtask_opt.tour.constraints import symmetric_path_matrix
+    from subtask_opt.tour.exact import held_karp
 
     rng = np.random.default_rng(2)
     xy = rng.random((7, 2))

@@ -66,7 +66,8 @@ class TourConstraints:
         tour: ``"closed"`` (return to the start) or ``"open"`` (a path).
         start: the subtask the tour or path starts at (default: the problem's
             ``first``, else 0). Not with ``home``.
-        end: (open paths only) the subtask the path ends at; ``None``: free.
+        end: the subtask an open path ends at (``None``: free), or the last one before
+            the home of a closed tour (a planar arm's home point, a serial arm's home).
         home: a home visited first and last (closed tours only): an ``(x, y)``
             point for an arm problem, a node index for a matrix problem.
         precedence: pairs ``(a, b)``, subtask ``a`` before subtask ``b``
@@ -87,9 +88,6 @@ class TourConstraints:
             object.__setattr__(self, "start", _index(self.start, "start"))
         if self.end is not None:
             object.__setattr__(self, "end", _index(self.end, "end"))
-            if self.tour != "open":
-                raise ParameterError(f"TourConstraints.end={self.end} needs tour='open' (a "
-                                     "closed tour ends where it starts)")
             if self.start is not None and self.end == self.start:
                 raise ParameterError(f"TourConstraints: an open path from subtask {self.start} "
                                      f"to itself is a closed tour; use tour='closed'")
@@ -113,12 +111,17 @@ class TourConstraints:
         """Whether this is today's closed tour without home or precedence."""
         return self.tour == "closed" and self.home is None and not self.precedence
 
-    def check_size(self, n: int, *, matrix_home: bool) -> None:
+    def check_size(self, n: int, *, matrix_home: bool, own_home: bool = False) -> None:
         """Raise if an index is out of 0..n-1 or the options contradict each other.
 
         ``n`` counts the problem's subtasks (matrix problems: its nodes, home
-        included); ``matrix_home`` says the home must be a node index.
+        included); ``matrix_home`` says the home must be a node index; ``own_home``
+        that the problem has a home of its own (a serial arm's home configuration).
         """
+        if (self.tour == "closed" and self.end is not None and self.home is None
+                and not own_home):
+            raise ParameterError(f"TourConstraints.end={self.end} needs tour='open' or a "
+                                 "home (a closed tour ends where it starts)")
         top = n - 1
         for name in ("start", "end"):
             v = getattr(self, name)
@@ -344,6 +347,11 @@ def canonical(matrix: np.ndarray, constraints: TourConstraints, *, default_start
             m[last, first] = 0.0
         else:
             m[:, first] = 0.0
+    elif constraints.end is not None:  # the last subtask before the home
+        last_visit = int(constraints.end)
+        before = [(v, last_visit) for v in range(m.shape[0]) if v not in (first, last_visit)]
+        pairs = np.unique(np.vstack([pairs, np.array(before, dtype=np.int64).reshape(-1, 2)]),
+                          axis=0)
     for a, b in pairs:
         if b == first:
             raise ParameterError(f"precedence ({a}, {b}) asks for a subtask before the "

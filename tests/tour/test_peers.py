@@ -8,7 +8,8 @@ import itertools
 import numpy as np
 import pytest
 
-from subtask_opt.arm.peers import (
+from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.peers import (
     elkai_gtsp,
     layered_shortest_path,
     local_search,
@@ -23,7 +24,6 @@ from subtask_opt.arm.peers import (
     tsp_cspace,
     two_opt,
 )
-from subtask_opt.base.errors import InputDataError, ParameterError
 
 VMAX = np.array([3.0, 2.0, 2.5, 4.0])
 

@@ -1,40 +1,28 @@
-"""Order the subtasks of a planar arm for minimum total travel time.
+"""Solve a tour problem: the micro-GA, the lower bound and the certificate.
 
-A :class:`SequencingProblem` turns subtasks + arm + time model into the matrix
-of minimum rest-to-rest travel times; :func:`solve` finds a closed tour over it
-with the micro genetic algorithm of the paper (``preset="paper"``) or with our
-default, a micro-GA whose children are polished by local search.
+:func:`solve` finds a minimum-cost closed tour (or an open path, a tour from a home,
+with precedence) over a :class:`~subtask_opt.tour.problem.MatrixProblem` or a
+:class:`~subtask_opt.tour.problem.ClusteredProblem`, with the micro genetic algorithm of
+the paper (``preset="paper"``) or with our default, a micro-GA whose children are
+polished by local search. Every answer carries the Held-Karp lower bound (up to
+``SolverParams.bound_max_nodes`` nodes) and, on request, an exact certificate.
 
->>> from subtask_opt import load_arm, builtin_case, SequencingProblem, solve
->>> arm = load_arm("planar_2r")
->>> problem = SequencingProblem(builtin_case("random30", arm, seed=0), arm)
->>> result = solve(problem, seed=1)
+>>> import numpy as np
+>>> from subtask_opt.tour import MatrixProblem, solve
+>>> points = np.random.default_rng(0).random((20, 2))
+>>> costs = np.hypot(*(points[:, None] - points[None]).transpose(2, 0, 1))
+>>> result = solve(MatrixProblem(costs), seed=1)
 >>> print(result.summary())  # doctest: +SKIP
 """
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from subtask_opt._kernel_cache import compiling
-from subtask_opt.arm import _configuration_kernels  # noqa: F401  (registers its GA kind)
-from subtask_opt.arm._configuration_kernels import ConfiguredData
-from subtask_opt.arm.bound import candidate_table, lower_bound
-from subtask_opt.arm.configurations import penalty_for
-from subtask_opt.arm.constraints import (
-    Canonical,
-    TourConstraints,
-    canonical,
-    symmetric_path_matrix,
-    transform_tensor,
-)
-from subtask_opt.arm.report import TourReport, tour_report
 from subtask_opt.base.errors import (
-    InputDataError,
     NoPathError,
     ParameterError,
     SubtaskOptError,
@@ -51,10 +39,21 @@ from subtask_opt.base.stop import (
     TargetCost,
     as_criteria,
 )
+from subtask_opt.chromosomes import use
 from subtask_opt.ga.config import GAConfig
 from subtask_opt.ga.kinds import Kind
 from subtask_opt.ga.loop import MAX_RUNS, run_ga
-from subtask_opt.ga.permutation import (
+from subtask_opt.tour.bound import candidate_table, lower_bound
+from subtask_opt.tour.clustered import ConfiguredData
+from subtask_opt.tour.configurations import penalty_for
+from subtask_opt.tour.constraints import (
+    Canonical,
+    TourConstraints,
+    canonical,
+    symmetric_path_matrix,
+    transform_tensor,
+)
+from subtask_opt.tour.permutation import (
     KICKS_FROM,
     SEARCH_EXACT,
     SEARCH_FAST,
@@ -63,17 +62,18 @@ from subtask_opt.ga.permutation import (
     make_aux,
     neighbour_table,
 )
-from subtask_opt.ga.precedence import PinnedAux, make_pinned_aux
-
-if TYPE_CHECKING:
-    from subtask_opt.arm.model import Arm
-    from subtask_opt.arm.tasks import SubtaskSet
-    from subtask_opt.arm.timing.models import TimingResult
+from subtask_opt.tour.precedence import PinnedAux, make_pinned_aux
+from subtask_opt.tour.problem import (
+    MAX_NODES,
+    ClusteredProblem,
+    MatrixProblem,
+    TourProblem,
+)
 
 PRESETS = ("default", "paper")
 CONFIGURED_RUNS = 12
 """Independent runs of the default search when it chooses configurations below
-:data:`~subtask_opt.ga.permutation.KICKS_FROM` subtasks, each stalling two thirds as long
+:data:`~subtask_opt.tour.permutation.KICKS_FROM` subtasks, each stalling two thirds as long
 as a fixed-configuration search (a third of what a single run had). On the 11 hardest
 held-out sets of ``benchmarks/heldout.py`` (30-60 subtasks, both robots, 60 seeds each)
 one run at the old stall ended in a slightly longer local optimum (one of two or three per
@@ -90,9 +90,6 @@ PAPER_LOOP = GAConfig(population=5, elite=1, crossover_rate=1.0, mutation_rate=0
 string kept; "8 pairs" of strings that differ mated, the better 4 children kept;
 greedy crossover from a random city; restart (best + 4 random strings) when the
 costs are within 1% or stopped changing; no mutation."""
-CONFIGURATION_MODES = ("fixed", "optimize")
-DEFAULT_TIME_MODEL = "joint"
-"""The time model API and CLI use by default: one the arm can execute."""
 
 
 @dataclass(frozen=True)
@@ -202,187 +199,6 @@ class SolverParams:
 
 
 @dataclass(frozen=True)
-class MatrixProblem:
-    """A tour over a travel-time matrix of your own (N x N, finite, >= 0).
-
-    Attributes:
-        matrix: the travel times (copied, read-only).
-        first: index of the node the closed tour starts and ends at (default 0).
-    """
-
-    matrix: np.ndarray
-    first: int | None = None
-
-    def __post_init__(self) -> None:
-        m = _validated_matrix(self.matrix)
-        object.__setattr__(self, "matrix", m)
-        _check_first(self.first, m.shape[0])
-
-    @property
-    def size(self) -> int:
-        return int(self.matrix.shape[0])
-
-    @property
-    def symmetric(self) -> bool:
-        """Whether the travel times are the same both ways."""
-        return bool(np.allclose(self.matrix, self.matrix.T, rtol=1e-12, atol=0.0))
-
-    def tour_time(self, order: np.ndarray) -> float:
-        """Total time of the closed tour visiting ``order`` (validated)."""
-        order = _validated_order(order, self.size)
-        return float(np.sum(self.matrix[order, np.roll(order, -1)]))
-
-
-@dataclass(frozen=True)
-class SequencingProblem:
-    """Subtasks, the arm that visits them and the time model between them.
-
-    The travel-time matrix is computed once, on construction. For a matrix of
-    your own use :class:`MatrixProblem` (or :meth:`from_matrix`).
-
-    Attributes:
-        subtasks: the points to visit.
-        arm: the robot (see :func:`subtask_opt.load_arm`).
-        time_model: ``"joint"`` (default: times the arm can execute),
-            ``"line"``, ``"trapezoid"`` or ``"paper"`` (see
-            :mod:`subtask_opt.arm.timing`).
-        first: index of the subtask the closed tour starts and ends at
-            (default: the first row).
-        k: via-point fraction of the paper's time model.
-        elbow: IK branch used at every subtask (0 or 1) with fixed
-            configurations; a subtask that branch cannot reach uses the other.
-        configurations: ``"optimize"`` (default for the ``joint`` and ``line``
-            models) lets :func:`solve` choose the order and one elbow
-            configuration per subtask together (a generalised TSP, see
-            :mod:`subtask_opt.arm.configurations`); ``"fixed"`` visits every
-            subtask on the ``elbow`` branch (the only choice for the Cartesian
-            models). ``None`` picks the default for the model.
-        line_fallback: (``line``) what to do with a straight line the arm
-            cannot follow: ``"joint"`` drives that leg as a joint move,
-            ``"exclude"`` forbids it.
-        check_all_legs: (Cartesian models) also check every straight line the
-            arm might drive, not only the answer's legs, into
-            ``Result.report.diagnostics["all_pairs_leg_check"]``: N (N - 1) / 2
-            legs, a hundred times the matrix's cost at N = 1000. The tour's own
-            legs are always checked (:class:`~subtask_opt.arm.report.TourReport`).
-
-    With ``configurations="optimize"``, :attr:`matrix` holds the times at the
-    ``elbow`` branch; :meth:`decode` gives the best configurations of an order.
-    """
-
-    subtasks: SubtaskSet
-    arm: Arm
-    time_model: str = DEFAULT_TIME_MODEL
-    first: int | None = None
-    k: float = 0.1
-    elbow: int = 0
-    configurations: str | None = None
-    line_fallback: str = "joint"
-    check_all_legs: bool = False
-    timing: TimingResult = field(init=False, compare=False, repr=False)
-    _matrix: np.ndarray = field(init=False, compare=False, repr=False)
-    _data: ConfiguredData | None = field(default=None, init=False, compare=False, repr=False)
-
-    def __post_init__(self) -> None:
-        from subtask_opt.arm.model import Arm
-        from subtask_opt.arm.tasks import SubtaskSet
-        from subtask_opt.arm.timing.models import travel_times
-
-        if isinstance(self.arm, str):
-            raise ParameterError(f"SequencingProblem.arm must be an Arm; got the name "
-                                 f"{self.arm!r}: load it with load_arm({self.arm!r})")
-        if not isinstance(self.arm, Arm):
-            raise ParameterError(f"SequencingProblem.arm must be an Arm, got "
-                                 f"{type(self.arm).__name__}")
-        if not isinstance(self.subtasks, SubtaskSet):
-            raise ParameterError(f"SequencingProblem.subtasks must be a SubtaskSet (see "
-                                 f"load_subtasks), got {type(self.subtasks).__name__}")
-        if self.subtasks.theta is not None and self.time_model in ("joint", "line"):
-            warnings.warn(f"the {self.time_model} model ignores the subtasks' theta: a 2-link "
-                          "arm cannot choose its tool angle (it follows from the position and "
-                          "the elbow)", UserWarning, stacklevel=3)
-        mode = self.configurations or default_configurations(self.time_model)
-        if mode not in CONFIGURATION_MODES:
-            raise ParameterError(
-                f"SequencingProblem.configurations must be one of "
-                f"{', '.join(CONFIGURATION_MODES)}, got {self.configurations!r}")
-        object.__setattr__(self, "configurations", mode)
-        if not isinstance(self.check_all_legs, bool):
-            raise ParameterError(f"SequencingProblem.check_all_legs must be True or False, "
-                                 f"got {self.check_all_legs!r}")
-        with compiling(f"timing-{self.time_model}", "the time-model kernels"):
-            timing = travel_times(self.subtasks, self.arm, self.time_model, k=self.k,
-                                  elbow=self.elbow, line_fallback=self.line_fallback)
-        object.__setattr__(self, "timing", timing)
-        if mode == "optimize":
-            if timing.branch_times is None:
-                raise ParameterError(
-                    f"SequencingProblem.configurations='optimize' needs the joint or line time "
-                    f"model (the {self.time_model!r} model does not time elbow changes)")
-            from subtask_opt.arm.configurations import pack_data
-
-            data, _ = pack_data(timing.branch_times)
-            object.__setattr__(self, "_data", data)
-        # Legs the line model excludes are the only infinite times allowed.
-        excluded = (np.isinf(timing.matrix)
-                    if self.line_fallback == "exclude" and self.time_model == "line" else None)
-        object.__setattr__(self, "_matrix", _validated_matrix(timing.matrix, allow_inf=excluded))
-        _check_first(self.first, self.size)
-
-    @staticmethod
-    def from_matrix(matrix: np.ndarray, *, first: int | None = None) -> MatrixProblem:
-        """A problem over a travel-time matrix of your own: a :class:`MatrixProblem`."""
-        return MatrixProblem(matrix, first=first)
-
-    @property
-    def matrix(self) -> np.ndarray:
-        """The N x N travel times at the fixed configurations (read-only)."""
-        return self._matrix
-
-    @property
-    def size(self) -> int:
-        return int(self._matrix.shape[0])
-
-    @property
-    def symmetric(self) -> bool:
-        """Whether the travel times are the same both ways (all built-in models)."""
-        return bool(np.allclose(self._matrix, self._matrix.T, rtol=1e-12, atol=0.0))
-
-    @property
-    def optimizes_configurations(self) -> bool:
-        """Whether :func:`solve` chooses the elbow configurations."""
-        return self._data is not None
-
-    def configured_data(self) -> ConfiguredData:
-        """The per-configuration leg times the GA decodes (``configurations="optimize"``)."""
-        if self._data is None:
-            raise ParameterError("this problem has fixed configurations")
-        return self._data
-
-    def tour_time(self, order: np.ndarray) -> float:
-        """Total time of the closed tour visiting ``order`` (validated).
-
-        With ``configurations="optimize"``: the time with the best
-        configurations for that order (see :meth:`decode`).
-        """
-        return self.decode(order)[0]
-
-    def decode(self, order: np.ndarray) -> tuple[float, np.ndarray]:
-        """``(tour time, configurations)``: the best elbow configurations for ``order``.
-
-        For a problem with fixed configurations these are the fixed ones.
-        """
-        order = _validated_order(order, self.size)
-        if not self.optimizes_configurations:
-            return (float(np.sum(self._matrix[order, np.roll(order, -1)])),
-                    np.asarray(self.timing.configurations))
-        from subtask_opt.arm.configurations import best_configurations
-
-        assert self.timing.branch_times is not None
-        return best_configurations(order, self.timing.branch_times)
-
-
-@dataclass(frozen=True)
 class Result:
     """The answer of :func:`solve`: the tour and the facts of the search.
 
@@ -401,21 +217,27 @@ class Result:
         history: best and mean cost per generation, restart generations.
         preset: the solver preset.
         lower_bound: no tour of the problem is shorter (Held-Karp 1-tree bound,
-            see :mod:`subtask_opt.arm.bound`); None when not computed.
+            see :mod:`subtask_opt.tour.bound`); None when not computed.
         gap_bound: ``(total_time - lower_bound) / lower_bound``, the largest
             relative distance from the optimum this answer can have (0: proven
             optimal).
         certified: ``"optimal (proven)"`` when the MILP proved the answer optimal,
             the reason otherwise (``solve(..., certify=True)``); None when not asked.
         report: for an arm problem, what the tour means for the arm
-            (:class:`~subtask_opt.arm.report.TourReport`); None for a matrix.
+            (:class:`~subtask_opt.arm.report.TourReport`); None for a tour problem.
             With a home it describes the closed tour through the home (the
             last subtask row); for an open path, the tour closed by its return.
+        configurations: the node chosen in each cluster (by cluster index) of a
+            clustered problem; an arm problem's (N, n) joint vector of every target
+            (input order); None for a matrix problem.
+        cpu: CPU seconds per phase of an arm problem (``ik``, ``collision``,
+            ``matrix``, ``search``, and numba's ``compile`` apart); empty for a tour
+            problem.
         constraints: the tour shape and precedence the answer keeps
-            (:class:`~subtask_opt.arm.constraints.TourConstraints`).
+            (:class:`~subtask_opt.tour.constraints.TourConstraints`).
         start: the subtask the answer starts at (None with a home).
 
-    With constraints (see :mod:`subtask_opt.arm.constraints`) the answer is in
+    With constraints (see :mod:`subtask_opt.tour.constraints`) the answer is in
     your terms: ``order`` leaves the home out, ``leg_times`` are the legs
     driven (with a home: home -> order[0], ..., order[-1] -> home, N + 1 legs;
     an open path: N - 1 legs, no return) and ``total_time`` is their sum.
@@ -433,10 +255,12 @@ class Result:
     preset: str
     lower_bound: float | None = None
     certified: str | None = None
-    report: TourReport | None = None
+    report: Any = None
     constraints: TourConstraints = field(default_factory=TourConstraints)
     start: int | None = None
     runs: int = 1
+    configurations: np.ndarray | None = None
+    cpu: dict[str, float] = field(default_factory=dict)
 
     @property
     def gap_bound(self) -> float | None:
@@ -448,8 +272,7 @@ class Result:
         """A few lines for a terminal."""
         lines = []
         if self.report is not None:
-            lines.append(f"{len(self.order)} subtasks, {self.report.time_model} time model, "
-                         f"robot {self.report.robot}")
+            lines.append(self.report.header(len(self.order)))
         lines += [
             f"total time {self.total_time:.4f} s  ({self.preset} preset, seed {self.seed}, "
             f"{self.generations} generations, {self.restarts} restarts"
@@ -466,14 +289,13 @@ class Result:
         if not self.constraints.is_plain:
             c = self.constraints
             where = (f"home {c.home}" if c.home is not None else
-                     f"from {self.start}" + (f" to {c.end}" if c.end is not None else ""))
+                     f"from {'home' if self.start is None else self.start}"
+                     + (f" to {c.end}" if c.end is not None else ""))
             lines.append(f"shape: {c.tour} tour, {where}, {len(c.precedence)} precedence "
                          "constraints")
         lines.append("order: " + " ".join(str(int(i)) for i in self.order))
-        if self.report is not None and self.report.configurations_mode == "optimize":
-            c = self.report.configurations[self.order]
-            lines.append("elbow: " + " ".join("du"[int(b)] for b in c)
-                         + f"  (d down, u up; {self.report.configuration_changes} changes)")
+        if self.report is not None:
+            lines += self.report.order_lines(self.order)
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
@@ -496,11 +318,14 @@ class Result:
             "start": self.start,
             "precedence": len(self.constraints.precedence),
             "history": self.history.to_dict(),
+            "configurations": (None if self.configurations is None
+                               else np.asarray(self.configurations).tolist()),
             "report": None if self.report is None else self.report.to_dict(),
         }
 
 
-def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
+
+def solve(problem: TourProblem, *, seed: int = 0,
           stop: StoppingCriterion | list[StoppingCriterion] | None = None,
           params: SolverParams | None = None, progress: bool = False,
           certify: bool = False, certify_time_limit: float = 60.0,
@@ -508,7 +333,8 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     """Find a minimum-time closed tour through the problem's subtasks (or nodes).
 
     Args:
-        problem: what to solve (an arm problem or a matrix problem).
+        problem: what to solve (a matrix or a clustered problem; arm problems go
+            through :func:`subtask_opt.solve`, which compiles them into one).
         seed: random seed in [0, 2**63); the same seed gives the same result.
         stop: one stopping criterion or a list (any of them stops the run);
             default: ``params.default_stop(N, configured=...)`` (``configured``: the
@@ -521,18 +347,17 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             precedence); the outcome is in :attr:`Result.certified`.
         constraints: the tour shape (closed from a start, open to a fixed or
             free end, a home visited first and last) and precedence pairs
-            (:class:`~subtask_opt.arm.constraints.TourConstraints`); default a
+            (:class:`~subtask_opt.tour.constraints.TourConstraints`); default a
             closed tour from the problem's ``first``. Open paths and homes are
             matrix transforms of the closed tour; precedence and a fixed end use
-            the pinned-permutation GA (:mod:`subtask_opt.ga.precedence`). With
-            ``configurations="optimize"`` and precedence or a fixed end, the
-            order is searched on the cheapest-configuration times and the
-            configurations of that order are then decoded exactly (a heuristic;
-            the bound stays valid).
+            the pinned-permutation GA (:mod:`subtask_opt.tour.precedence`). With
+            a clustered problem and precedence or a fixed end, the order is
+            searched on the cheapest-node costs and the nodes of that order are
+            then decoded exactly (a heuristic; the bound stays valid).
     """
-    if not isinstance(problem, (SequencingProblem, MatrixProblem)):
-        raise ParameterError(f"solve needs a SequencingProblem or MatrixProblem, got "
-                             f"{type(problem).__name__}")
+    if not isinstance(problem, (MatrixProblem, ClusteredProblem)):
+        raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem or ArmProblem, "
+                             f"got {type(problem).__name__}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
             0 <= seed < 2**63):
         raise ParameterError(f"seed must be an integer in [0, 2**63), got {seed!r}")
@@ -541,7 +366,7 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     elif not isinstance(params, SolverParams):
         raise ParameterError(f"solve: params must be a SolverParams, got {params!r}")
     cons, problem, canon = _shaped(problem, constraints)
-    configured = isinstance(problem, SequencingProblem) and problem.optimizes_configurations
+    configured = isinstance(problem, ClusteredProblem)
     criteria = as_criteria(stop, params.default_stop(problem.size, configured=configured))
     runs = params.default_runs(problem.size, configured=configured)
     matrix = problem.matrix
@@ -550,13 +375,12 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
     tensor = None
     data: np.ndarray | ConfiguredData
     if configured:
-        assert isinstance(problem, SequencingProblem)
-        from subtask_opt.arm.configurations import pack_data
+        assert isinstance(problem, ClusteredProblem)
+        from subtask_opt.tour.configurations import pack_data
 
-        assert problem.timing.branch_times is not None
         search = SEARCH_PAPER if paper else SEARCH_FAST
         if canon.open_path:
-            tensor = transform_tensor(problem.timing.branch_times, canon)
+            tensor = transform_tensor(problem.costs, canon)
             data = pack_data(tensor)[0]._replace(search=search)
         else:
             data = problem.configured_data()._replace(search=search)
@@ -578,7 +402,7 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             symmetric = problem.symmetric and not canon.open_path
             search = SEARCH_FAST if symmetric else SEARCH_EXACT
     if canon.needs_pins:
-        # precedence or a fixed end: operators that keep both (ga/precedence.py), over the
+        # precedence or a fixed end: operators that keep both (tour/precedence.py), over the
         # cheapest-configuration times when the configurations are decoded afterwards
         data = np.ascontiguousarray(dist)
         kind = Kind.PINNED_PERMUTATION
@@ -613,33 +437,26 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
             done[0] = p.generation
             bar.set_postfix_str(f"best {p.best_cost:.4f}")
 
-        outcome = run_ga(kind, config, data, aux, max_genes=n, seed=int(seed),
+        outcome = run_ga(use(kind), config, data, aux, max_genes=n, seed=int(seed),
                          criteria=criteria, on_chunk=on_chunk, runs=runs)
     tour = _rotate(outcome.genes, canon.first)
-    report = None
-    if isinstance(problem, SequencingProblem):
-        if configured:
-            from subtask_opt.arm.configurations import best_configurations, induced_matrix
+    configs = None
+    if configured:
+        assert isinstance(problem, ClusteredProblem)
+        from subtask_opt.tour.configurations import best_configurations, induced_matrix
 
-            configs = best_configurations(
-                tour, problem.timing.branch_times if tensor is None else tensor)[1]
-            matrix = induced_matrix(problem.timing.branch_times, configs)
-            matrix.setflags(write=False)
-        else:
-            configs = np.asarray(problem.timing.configurations)
-    cyclic = matrix[tour, np.roll(tour, -1)]
+        configs = best_configurations(tour, problem.costs if tensor is None else tensor)[1]
+        matrix = induced_matrix(problem.costs, configs)
+        matrix.setflags(write=False)
     legs = canon.user_legs(matrix, tour)
     if not np.all(np.isfinite(legs)):
         k = int(np.flatnonzero(~np.isfinite(legs))[0])
         raise NoPathError(
-            f"no tour avoids the excluded straight lines (the best one needs the "
-            f"impossible line {tour[k]} -> {tour[(k + 1) % n]}); use line_fallback='joint' "
-            "to drive such legs as joint moves")
+            f"no tour avoids the impossible legs (the best one needs the impossible leg "
+            f"{tour[k]} -> {tour[(k + 1) % n]})")
     broken = canon.violations(tour)
     if broken:  # the operators keep every constraint: this is a bug, never an answer
         raise SubtaskOptError(f"internal error: the answer breaks its constraints: {broken}")
-    if isinstance(problem, SequencingProblem):
-        report = tour_report(problem, tour, configs, cyclic)
     total_time = float(np.sum(legs))
     certified = None
     if certify:
@@ -658,19 +475,20 @@ def solve(problem: SequencingProblem | MatrixProblem, *, seed: int = 0,
         preset=params.preset,
         lower_bound=bound,
         certified=certified,
-        report=report,
         constraints=cons,
         start=None if canon.home >= 0 else canon.first,
         runs=outcome.runs,
+        configurations=configs,
     )
 
 
-def _relaxation_bound(problem: SequencingProblem | MatrixProblem, canon: Canonical,
+
+def _relaxation_bound(problem: TourProblem, canon: Canonical,
                       costs: np.ndarray) -> float:
     """A lower bound of the constrained problem: a bound of a relaxation without precedence.
 
     ``costs`` are the canonical costs the GA sees. An open path over symmetric
-    costs is bounded through :func:`~subtask_opt.arm.constraints.symmetric_path_matrix`
+    costs is bounded through :func:`~subtask_opt.tour.constraints.symmetric_path_matrix`
     (far tighter than the asymmetric bound of its zero-cost return); everything
     else by the bound of ``costs``.
     """
@@ -687,17 +505,16 @@ def _relaxation_bound(problem: SequencingProblem | MatrixProblem, canon: Canonic
     return lower_bound(costs, seed=0)
 
 
-def _shaped(problem: SequencingProblem | MatrixProblem, constraints: TourConstraints | None,
-            ) -> tuple[TourConstraints, SequencingProblem | MatrixProblem, Canonical]:
-    """The validated constraints, the problem to search (an arm's home appended) and its
-    canonical form (:func:`subtask_opt.arm.constraints.canonical`)."""
+def _shaped(problem: TourProblem, constraints: TourConstraints | None,
+            ) -> tuple[TourConstraints, TourProblem, Canonical]:
+    """The validated constraints, the problem and its canonical form
+    (:func:`subtask_opt.tour.constraints.canonical`)."""
     if constraints is None:
         constraints = TourConstraints()
     elif not isinstance(constraints, TourConstraints):
         raise ParameterError(f"solve: constraints must be a TourConstraints, got "
                              f"{constraints!r}")
-    arm_home = isinstance(problem, SequencingProblem)
-    constraints.check_size(problem.size, matrix_home=not arm_home)
+    constraints.check_size(problem.size, matrix_home=True)
     first = problem.first
     if first is not None and constraints.start is not None and first != constraints.start:
         raise ParameterError(f"the problem's first={first} and the constraints' "
@@ -705,59 +522,26 @@ def _shaped(problem: SequencingProblem | MatrixProblem, constraints: TourConstra
     if first is not None and constraints.home is not None:
         raise ParameterError(f"the problem's first={first} and a home contradict each other "
                              "(with a home the tour starts at the home)")
-    home_index = None
-    if arm_home and constraints.home is not None:
-        assert isinstance(problem, SequencingProblem)
-        problem = _with_home(problem, constraints.home)  # type: ignore[arg-type]
-        home_index = problem.size - 1
-    canon = canonical(problem.matrix, constraints, default_start=first or 0,
-                      home_index=home_index)
+    canon = canonical(problem.matrix, constraints, default_start=first or 0)
     return constraints, problem, canon
 
 
-def _with_home(problem: SequencingProblem, home: tuple[float, float]) -> SequencingProblem:
-    """``problem`` with the home point appended as the last subtask (checked reachable)."""
-    import dataclasses
-
-    from subtask_opt.arm.tasks import DUPLICATE_TOL, SubtaskSet
-    from subtask_opt.base.errors import UnreachableError
-
-    xy = np.array(home, dtype=float)
-    try:
-        problem.arm.check_reachable(xy.reshape(1, 2))
-    except UnreachableError as exc:
-        text = str(exc)
-        why = text.partition(") ")[2] if text.startswith("subtask 0 at") else text
-        raise InputDataError(f"home point ({xy[0]:.6g}, {xy[1]:.6g}) is unreachable: {why}") \
-            from None
-    pts = problem.subtasks.points
-    close = np.flatnonzero(np.hypot(*(pts - xy).T) < DUPLICATE_TOL)
-    if close.size:
-        raise InputDataError(f"home point ({xy[0]:.6g}, {xy[1]:.6g}) is subtask {close[0]}; "
-                             "a home is not a subtask (use start= for a closed tour from it)")
-    theta = problem.subtasks.theta
-    subtasks = SubtaskSet(np.vstack([pts, xy]),
-                          None if theta is None else np.append(theta, 0.0),
-                          problem.subtasks.name)
-    return dataclasses.replace(problem, subtasks=subtasks, first=None)
-
-
-def _certify(problem: SequencingProblem | MatrixProblem, canon: Canonical, total: float,
+def _certify(problem: TourProblem, canon: Canonical, total: float,
              time_limit: float, tour: np.ndarray, configs: np.ndarray | None) -> str:
     """Prove ``total`` optimal with an exact method, or say why not.
 
     Chosen configurations (``configs``): the generalised-TSP branch and cut
-    (:func:`~subtask_opt.arm.exact.gtsp_optimum`, this answer as its incumbent) for a
+    (:func:`~subtask_opt.tour.exact.gtsp_optimum`, this answer as its incumbent) for a
     closed tour without precedence. Fixed configurations: a symmetric closed tour uses
     the subtour-cut MILP; anything else (asymmetric costs, an open path, a home,
     precedence) the MTZ MILP of the canonical form.
     """
-    from subtask_opt.arm.exact import milp_optimum, milp_pinned
+    from subtask_opt.tour.exact import milp_optimum, milp_pinned
 
     require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
     try:
         if configs is not None:
-            assert isinstance(problem, SequencingProblem)
+            assert isinstance(problem, ClusteredProblem)
             if canon.open_path or canon.pairs.size:
                 return ("not certified: with chosen configurations only closed tours "
                         "without precedence are certified")
@@ -781,22 +565,21 @@ def _certify(problem: SequencingProblem | MatrixProblem, canon: Canonical, total
     return f"not optimal: the proven optimum is {optimum:.6g} ({excess:.4f}% less)"
 
 
-def proven_configured_optimum(problem: SequencingProblem, tour: np.ndarray,
+def proven_configured_optimum(problem: ClusteredProblem, tour: np.ndarray,
                               configs: np.ndarray, time_limit: float) -> float:
     """The proven optimum of a closed tour over orders and configurations (the
     generalised TSP of a problem that chooses configurations), by
-    :func:`~subtask_opt.arm.exact.gtsp_optimum` with ``tour`` at ``configs`` (per subtask)
+    :func:`~subtask_opt.tour.exact.gtsp_optimum` with ``tour`` at ``configs`` (per subtask)
     as its incumbent, which only speeds the proof up.
 
     Raises:
         SubtaskOptError: not proven within ``time_limit`` seconds, or leg times that are
             not finite and symmetric between the reachable configurations.
     """
-    from subtask_opt.arm.configurations import configuration_graph
-    from subtask_opt.arm.exact import gtsp_optimum
+    from subtask_opt.tour.configurations import configuration_graph
+    from subtask_opt.tour.exact import gtsp_optimum
 
-    cost, subtask, configuration = configuration_graph(problem.timing.branch_times,
-                                                       problem.timing.branch_joints)
+    cost, subtask, configuration = configuration_graph(problem.costs, problem.present)
     if not np.all(np.isfinite(cost)) or not np.allclose(cost, cost.T, rtol=1e-9, atol=1e-12):
         raise SubtaskOptError("the generalised-TSP certificate needs finite, symmetric "
                               "leg times between the configurations")
@@ -814,59 +597,4 @@ def _rotate(tour: np.ndarray, first: int) -> np.ndarray:
 PINNED_STALL = 60
 """Default stall (generations without improvement) of searches with precedence or a
 fixed end; 15 missed the optimum of 1 in 200 random small constrained instances."""
-
-MAX_LEG_TIME = 1e9
-"""The largest finite travel time a matrix may hold (sums of N of them stay exact enough)."""
-MAX_NODES = 20_000
-"""The most nodes a problem may have (dense N x N matrices)."""
-
-
-def _validated_matrix(matrix: np.ndarray, allow_inf: np.ndarray | None = None) -> np.ndarray:
-    try:
-        raw = np.asarray(matrix)
-        if raw.dtype.kind not in "iuf":
-            raise TypeError
-        m = np.array(raw, dtype=float)
-    except (TypeError, ValueError, OverflowError):
-        raise InputDataError("travel-time matrix must hold real numbers") from None
-    if m.ndim != 2 or m.shape[0] != m.shape[1]:
-        raise InputDataError(f"travel-time matrix must be square, got shape {m.shape}")
-    if m.shape[0] < 3:
-        raise InputDataError(f"need at least 3 subtasks, got {m.shape[0]}")
-    if m.shape[0] > MAX_NODES:
-        raise InputDataError(f"the matrix has {m.shape[0]} nodes; the limit is {MAX_NODES}")
-    bad = np.argwhere(~np.isfinite(m) & (True if allow_inf is None else ~allow_inf))
-    if bad.size:
-        i, j = bad[0]
-        raise InputDataError(
-            f"travel time from subtask {i} to {j} is {m[i, j]} (must be finite)")
-    neg = np.argwhere(m < 0)
-    if neg.size:
-        i, j = neg[0]
-        raise InputDataError(f"travel time from subtask {i} to {j} is negative ({m[i, j]})")
-    big = np.argwhere(np.isfinite(m) & (m > MAX_LEG_TIME))
-    if big.size:
-        i, j = big[0]
-        raise InputDataError(f"travel time from subtask {i} to {j} is {m[i, j]:g}; the limit "
-                             f"is {MAX_LEG_TIME:g} (scale the matrix)")
-    m.setflags(write=False)
-    return m
-
-
-def _check_first(first: object, n: int) -> None:
-    if first is not None and (isinstance(first, bool) or not isinstance(first, (int, np.integer))
-                              or not 0 <= first < n):
-        raise ParameterError(f"first must be an index in [0, {n - 1}], got {first!r}")
-
-
-def default_configurations(time_model: str) -> str:
-    """The configuration mode a time model gets by default (API and CLI alike)."""
-    return "optimize" if time_model in ("joint", "line") else "fixed"
-
-
-def _validated_order(order: np.ndarray, n: int) -> np.ndarray:
-    o = np.asarray(order)
-    if o.shape != (n,) or not np.array_equal(np.sort(o), np.arange(n)):
-        raise ParameterError(f"order must be a permutation of 0..{n - 1}, got {order!r}")
-    return o.astype(np.int64)
 

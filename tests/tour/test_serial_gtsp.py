@@ -9,8 +9,6 @@ import math
 import numpy as np
 import pytest
 
-from subtask_opt.arm import _configuration_kernels as gc
-from subtask_opt.arm.configurations import pack_layers
 from subtask_opt.arm.timing.joint_legs import (
     joint_limits,
     ruckig_leg_time,
@@ -18,7 +16,10 @@ from subtask_opt.arm.timing.joint_legs import (
     trapezoid_square,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.ga.permutation import make_aux, neighbour_table
+from subtask_opt.chromosomes import use
+from subtask_opt.tour import clustered as gc
+from subtask_opt.tour.configurations import pack_layers
+from subtask_opt.tour.permutation import make_aux, neighbour_table
 
 
 def _random_instance(rng: np.random.Generator, n: int, kmax: int, n_joints: int = 3):
@@ -52,7 +53,7 @@ def _run_ga(data, n: int, seed: int) -> np.ndarray:
     from subtask_opt.ga.loop import run_ga
 
     aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=data.search)
-    out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
+    out = run_ga(use(Kind.CONFIGURED_PERMUTATION), GAConfig(), data, aux, max_genes=n, seed=seed,
                  criteria=[NoImprovement(30), MaxGenerations(20_000)])
     return out.genes.astype(np.int64)
 

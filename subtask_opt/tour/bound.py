@@ -452,8 +452,8 @@ ALPHA_FROM = 100
 def candidate_table(matrix: np.ndarray, k: int) -> np.ndarray:
     """The local search's candidate lists: alpha-nearest (:func:`alpha_neighbour_table`)
     for a finite symmetric matrix of at least :data:`ALPHA_FROM` cities, else the
-    nearest (:func:`~subtask_opt.ga.permutation.neighbour_table`)."""
-    from subtask_opt.ga.permutation import neighbour_table
+    nearest (:func:`~subtask_opt.tour.permutation.neighbour_table`)."""
+    from subtask_opt.tour.permutation import neighbour_table
 
     m = np.asarray(matrix, dtype=float)
     off = ~np.eye(m.shape[0], dtype=bool)

@@ -12,7 +12,7 @@
 * :func:`held_karp_pinned` and :func:`milp_pinned` - the same two methods for
   tours with a pinned start, an optional pinned end and precedence pairs
   (asymmetric costs welcome); :func:`exact_constrained` applies them to a matrix
-  problem with :class:`~subtask_opt.arm.constraints.TourConstraints`.
+  problem with :class:`~subtask_opt.tour.constraints.TourConstraints`.
 * :func:`gtsp_optimum` - the generalised TSP (one node of each cluster: an
   arm's subtasks, each reachable in several elbow configurations) by branch and
   cut with HiGHS; certifies the joint time model's 30- to 60-subtask optima.
@@ -33,7 +33,7 @@ from subtask_opt.base.errors import ParameterError, SubtaskOptError, require_int
 from subtask_opt.base.files import quiet_stdout
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.constraints import TourConstraints
+    from subtask_opt.tour.constraints import TourConstraints
 
 
 def _square_matrix(matrix: np.ndarray) -> np.ndarray:
@@ -279,7 +279,7 @@ def _walk(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 # --- tours with a pinned start, an optional pinned end and precedence pairs ---------------
 #
-# These work on the canonical form of :mod:`subtask_opt.arm.constraints`: a closed tour
+# These work on the canonical form of :mod:`subtask_opt.tour.constraints`: a closed tour
 # over a (possibly asymmetric) matrix starting at ``first``, ending at ``last`` (-1: any
 # node) and placing ``a`` before ``b`` for every pair. An open path is a closed tour whose
 # return leg costs nothing; :func:`exact_constrained` does that transform for you.
@@ -480,7 +480,7 @@ def exact_constrained(matrix: np.ndarray, constraints: TourConstraints, *,
     free return leg of an open path. ``method``: ``"held_karp"`` (N <= 13) or
     ``"milp"``.
     """
-    from subtask_opt.arm.constraints import canonical
+    from subtask_opt.tour.constraints import canonical
 
     if method not in ("held_karp", "milp"):
         raise ParameterError(f"method must be 'held_karp' or 'milp', got {method!r}")
@@ -601,6 +601,70 @@ def _pair_cuts(w: np.ndarray, y: np.ndarray, start: np.ndarray, tol: float
                 r[u, t] = 0.0
                 r[t, u] = 0.0
     return pairs[:found], values[:found], sides[:found]
+
+
+CLUSTERED_HELD_KARP_MAX = 12
+"""Most clusters :func:`clustered_held_karp` takes (its table has 2**N x M entries)."""
+
+
+def clustered_held_karp(legs: np.ndarray, offsets: np.ndarray, start: np.ndarray,
+                        back: np.ndarray | None, *, pairs: np.ndarray | None = None,
+                        last: int = -1) -> float:
+    """Exact minimum of a tour from a start node through one node of every cluster.
+
+    Held and Karp's dynamic programme over (clusters visited, node last visited): the
+    path starts at a start node outside the clusters (a robot's home), visits one node of
+    each of the N clusters (``offsets``: cluster i owns nodes offsets[i]..offsets[i+1]-1
+    of ``legs``), and returns to the start (``back``, the (M,) costs node -> start) or,
+    ``back=None``, ends at its last node (an open path; ``last`` >= 0 fixes its cluster).
+    ``pairs`` (P, 2): cluster a before cluster b.
+
+    Args:
+        legs: (M, M) costs between nodes.
+        start: (M,) costs start -> node.
+
+    Raises:
+        ParameterError: more than :data:`CLUSTERED_HELD_KARP_MAX` clusters, or shapes
+            that do not fit.
+    """
+    off = np.asarray(offsets, dtype=np.int64)
+    n = off.size - 1
+    m = int(off[-1])
+    c = np.asarray(legs, dtype=float)
+    if not 1 <= n <= CLUSTERED_HELD_KARP_MAX:
+        raise ParameterError(f"clustered_held_karp takes 1..{CLUSTERED_HELD_KARP_MAX} "
+                             f"clusters, got {n}")
+    if c.shape != (m, m) or np.shape(start) != (m,) or (back is not None
+                                                        and np.shape(back) != (m,)):
+        raise ParameterError(f"clustered_held_karp: legs must be ({m}, {m}) and start/back "
+                             f"({m},)")
+    need = np.zeros(n, dtype=np.int64)  # bit mask of the clusters each cluster waits for
+    for a, b in np.asarray(pairs if pairs is not None else [], dtype=np.int64).reshape(-1, 2):
+        need[b] |= 1 << int(a)
+    owner = np.repeat(np.arange(n), np.diff(off))
+    best = np.full((1 << n, m), np.inf)
+    for t in range(n):
+        if need[t] == 0:
+            best[1 << t, off[t]:off[t + 1]] = np.asarray(start, dtype=float)[off[t]:off[t + 1]]
+    for subset in range(1, 1 << n):
+        row = best[subset]
+        if not np.isfinite(row).any():
+            continue
+        inside = ((subset >> owner) & 1).astype(bool)
+        here = np.where(inside, row, np.inf)
+        for t in range(n):
+            if subset >> t & 1 or need[t] & ~subset:
+                continue
+            block = slice(off[t], off[t + 1])
+            reach = np.min(here[:, None] + c[:, block], axis=0)
+            target = best[subset | 1 << t, block]
+            np.minimum(target, reach, out=target)
+    full = best[(1 << n) - 1]
+    if back is not None:
+        return float(np.min(full + np.asarray(back, dtype=float)))
+    if last >= 0:
+        return float(np.min(full[off[last]:off[last + 1]]))
+    return float(np.min(full))
 
 
 def gtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,

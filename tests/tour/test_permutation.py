@@ -8,7 +8,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.base.errors import ParameterError
-from subtask_opt.ga.permutation import (
+from subtask_opt.tour.permutation import (
     SEARCH_EXACT,
     SEARCH_FAST,
     exact_local_search,
@@ -178,7 +178,7 @@ def test_partial_neighbour_table_equals_the_stable_full_sort(seed):
 
 
 def _work_on(tour: np.ndarray):
-    from subtask_opt.ga.permutation import _work
+    from subtask_opt.tour.permutation import _work
 
     return _work(tour, len(tour))
 
@@ -186,7 +186,7 @@ def _work_on(tour: np.ndarray):
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(8, 40), k=st.integers(1, 12))
 def test_three_opt_move_gain_is_the_cost_change(seed, n, k):
-    from subtask_opt.ga.permutation import _three_opt_move
+    from subtask_opt.tour.permutation import _three_opt_move
 
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n)
@@ -215,7 +215,7 @@ def _apply_moves(move, tour: np.ndarray, m: np.ndarray, nb: np.ndarray, rng) -> 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(8, 40), span=st.integers(1, 15))
 def test_kicks_and_or_opt_moves_report_their_cost_change_and_are_undone(seed, n, span):
-    from subtask_opt.ga.permutation import _double_bridge_kick, _or_opt_move, _undo
+    from subtask_opt.tour.permutation import _double_bridge_kick, _or_opt_move, _undo
 
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n)
@@ -242,7 +242,7 @@ def test_kicks_and_or_opt_moves_report_their_cost_change_and_are_undone(seed, n,
 
 def test_a_double_bridge_kick_changes_three_or_four_edges():
     # four in general; three when the first two segments are single cities (a swap)
-    from subtask_opt.ga.permutation import _double_bridge_kick
+    from subtask_opt.tour.permutation import _double_bridge_kick
 
     n = 30
     m = _points_matrix(1, n)
@@ -258,7 +258,7 @@ def test_a_double_bridge_kick_changes_three_or_four_edges():
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(8, 60))
 def test_iterated_local_search_never_worsens_and_repeats_with_a_seed(seed, n):
-    from subtask_opt.ga.permutation import iterated_local_search
+    from subtask_opt.tour.permutation import iterated_local_search
 
     m = _points_matrix(seed, n)
     aux = make_aux(neighbour_table(m), nearest_fallback=True, search=SEARCH_FAST)
@@ -284,7 +284,7 @@ def _brute_force(m: np.ndarray) -> float:
 
 @pytest.mark.parametrize("seed", range(6))
 def test_iterated_local_search_finds_the_brute_force_optimum_of_small_tours(seed):
-    from subtask_opt.ga.permutation import iterated_local_search
+    from subtask_opt.tour.permutation import iterated_local_search
 
     n = 9
     m = _points_matrix(100 + seed, n)
@@ -298,7 +298,7 @@ def test_iterated_local_search_finds_the_brute_force_optimum_of_small_tours(seed
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(5, 14))
 def test_asymmetric_local_search_reaches_a_two_opt_and_or_opt_optimum(seed, n):
-    from subtask_opt.ga.permutation import asymmetric_local_search
+    from subtask_opt.tour.permutation import asymmetric_local_search
 
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n) + rng.random((n, n))
@@ -344,7 +344,7 @@ def _segment_exchange_improvable(tour: np.ndarray, m: np.ndarray) -> bool:
 @given(seed=st.integers(0, 10_000), n=st.integers(8, 40), flip=st.booleans())
 def test_asymmetric_moves_report_their_cost_change(seed, n, flip):
     # segment exchanges and short 2-opt flips on an asymmetric matrix
-    from subtask_opt.ga.permutation import _asymmetric_two_opt_move, _segment_exchange_move
+    from subtask_opt.tour.permutation import _asymmetric_two_opt_move, _segment_exchange_move
 
     move = _asymmetric_two_opt_move if flip else _segment_exchange_move
     rng = np.random.default_rng(seed)
@@ -360,7 +360,7 @@ def test_asymmetric_moves_report_their_cost_change(seed, n, flip):
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 10_000), n=st.integers(8, 16))
 def test_asymmetric_neighbour_search_leaves_no_improving_segment_exchange(seed, n):
-    from subtask_opt.ga.permutation import asymmetric_neighbour_search
+    from subtask_opt.tour.permutation import asymmetric_neighbour_search
 
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n) + rng.random((n, n))

@@ -37,6 +37,9 @@ import numpy as np
 from numba import njit
 from numba.np.random.random_methods import random_interval
 
+from subtask_opt.ga.dispatch import OperatorSet
+from subtask_opt.ga.genes import copy_run, reverse_run
+
 FALLBACK_RANDOM = 0.0
 FALLBACK_NEAREST = 1.0
 SEARCH_PAPER = 0
@@ -136,26 +139,6 @@ def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 
         fallback=FALLBACK_NEAREST if nearest_fallback else FALLBACK_RANDOM,
         grasp_share=float(grasp_share), max_segment=int(max_segment), kicks=n_kicks,
         neighbours=np.ascontiguousarray(table[:, :k], dtype=np.int64))
-
-
-# Element loops rather than slice assignment: a slice assignment compiles numba's
-# shape check and its error formatting into every kernel that reaches it, which made
-# the cold compile of the GA loop measurably slower.
-@njit(cache=True, inline="always")
-def copy_run(dst, dst_at, src, src_at, count):
-    """``dst[dst_at : dst_at + count] = src[src_at : src_at + count]`` (no overlap)."""
-    for k in range(count):
-        dst[dst_at + k] = src[src_at + k]
-
-
-@njit(cache=True, inline="always")
-def reverse_run(a, start, stop):
-    """Reverse ``a[start:stop]`` in place."""
-    i, j = start, stop - 1
-    while i < j:
-        a[i], a[j] = a[j], a[i]
-        i += 1
-        j -= 1
 
 
 @njit(cache=True)
@@ -1107,3 +1090,7 @@ def improve(genes, length, data, aux):
     if aux.search == SEARCH_EXACT:
         return asymmetric_local_search(genes, length, data, aux)
     return length
+
+
+OPERATORS = OperatorSet(randomize, tour_cost, crossover, no_mutation, improve)
+"""The permutation kind's operators (registered by :mod:`subtask_opt.chromosomes`)."""

@@ -19,7 +19,7 @@ Two tour shapes:
   arm: 2 passes, exactly today's answers and tie-breaking: the lowest
   configuration index wins a tie).
 
-The permutation operators of :mod:`subtask_opt.ga.permutation` (greedy
+The permutation operators of :mod:`subtask_opt.tour.permutation` (greedy
 crossover, nearest-neighbour construction, kicks) see ``data.dist``, the
 cheapest time of each target-to-target leg over its configuration pairs.
 """
@@ -31,9 +31,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.ga import permutation as tsp
-from subtask_opt.ga.dispatch import OperatorSet, register
-from subtask_opt.ga.kinds import Kind
+from subtask_opt.ga.dispatch import OperatorSet
+from subtask_opt.tour import permutation as tsp
 
 
 class ConfiguredData(NamedTuple):
@@ -48,14 +47,14 @@ class ConfiguredData(NamedTuple):
         home_out: (M,) time home -> each configuration; empty (0,) for a closed
             tour without home.
         home_in: (M,) time each configuration -> home; empty likewise.
-        search: how the operators search, :data:`subtask_opt.ga.permutation.SEARCH_PAPER`
+        search: how the operators search, :data:`subtask_opt.tour.permutation.SEARCH_PAPER`
             (random restarts, no local search) or another mode (kicked restarts and
             alternating decode + local search).
         near: neighbour lists for *symmetric* legs (``legs == legs.T``, and
             ``home_out == home_in`` with a home): (N + 1, k) int64 over the targets and
             home (node N), or (N, k) over the targets of a closed tour without home. The
             local search then uses the neighbour-list moves of
-            :func:`subtask_opt.ga.permutation.local_search`, configuration-choosing
+            :func:`subtask_opt.tour.permutation.local_search`, configuration-choosing
             relocations and kicks; empty (0, 0): the exact full-sweep search, any costs.
         cheapest: (N, M), read with ``near`` only: the cheapest leg between any
             configuration of target v and configuration c, ``cheapest[v, c]``; the
@@ -449,7 +448,7 @@ def configuration_kick_count(kicks):
 def iterated_configured_search(genes, n, data, aux, rng, kicks):
     """``kicks`` local double-bridge kicks of the tour (with home, if any) on the decoded
     configurations of ``genes[:n]``, each polished and kept unless longer
-    (:func:`subtask_opt.ga.permutation.iterated_local_search`); symmetric legs."""
+    (:func:`subtask_opt.tour.permutation.iterated_local_search`); symmetric legs."""
     configs = np.empty(n, dtype=np.int64)
     decode(genes, n, data, configs)
     has_home = data.home_out.shape[0] > 0
@@ -585,5 +584,6 @@ def no_improvement(genes, length, data, aux):
     return length
 
 
-register(Kind.CONFIGURED_PERMUTATION,
-         OperatorSet(randomize, tour_cost, crossover, no_mutation, no_improvement))
+OPERATORS = OperatorSet(randomize, tour_cost, crossover, no_mutation, no_improvement)
+"""The clustered (configured) permutation kind's operators (registered by
+:mod:`subtask_opt.chromosomes`)."""

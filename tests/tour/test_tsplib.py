@@ -11,9 +11,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.bound import lower_bound
-from subtask_opt.arm.exact import held_karp, milp_optimum
-from subtask_opt.arm.tsplib import (
+from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.bound import lower_bound
+from subtask_opt.tour.exact import held_karp, milp_optimum
+from subtask_opt.tour.tsplib import (
     EDGE_WEIGHT_FORMATS,
     TspInstance,
     distance_matrix,
@@ -21,7 +22,6 @@ from subtask_opt.arm.tsplib import (
     read_tsplib,
     solve_tsp,
 )
-from subtask_opt.base.errors import InputDataError, ParameterError
 from tests.conftest import SHARED_DATA
 
 FUZZ_EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "60"))  # the long runs (make fuzz)

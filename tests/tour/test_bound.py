@@ -10,7 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.bound import (
+from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.bound import (
     ALPHA_FROM,
     BoundParams,
     _alpha_table,
@@ -20,9 +21,8 @@ from subtask_opt.arm.bound import (
     lower_bound,
     one_tree_bound,
 )
-from subtask_opt.arm.exact import held_karp, milp_optimum, tour_length
-from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.ga.permutation import neighbour_table
+from subtask_opt.tour.exact import held_karp, milp_optimum, tour_length
+from subtask_opt.tour.permutation import neighbour_table
 from tests.conftest import examples, size
 
 

@@ -7,8 +7,8 @@ import itertools
 import numpy as np
 import pytest
 
-from subtask_opt.arm.exact import held_karp, milp_optimum, tour_length
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.tour.exact import held_karp, milp_optimum, tour_length
 
 
 def _brute_force(m: np.ndarray) -> float:

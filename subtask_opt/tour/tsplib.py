@@ -22,7 +22,7 @@ line. The dense matrix is held in memory, so ``DIMENSION`` is limited by
 ``max_matrix_bytes`` (default 1 GiB: at most :data:`MAX_DIMENSION` cities).
 
 :func:`solve_tsp` runs :func:`subtask_opt.solve` on the instance and proves a
-lower bound (:func:`subtask_opt.arm.bound.lower_bound`) so the answer comes
+lower bound (:func:`subtask_opt.tour.bound.lower_bound`) so the answer comes
 with the largest possible gap to the optimum.
 """
 
@@ -530,7 +530,7 @@ class TspSolution:
         order: 0-based city indices of the closed tour (TSPLIB node ids are
             ``order + 1``).
         length: tour length in TSPLIB units.
-        lower_bound: no tour is shorter (:func:`subtask_opt.arm.bound.lower_bound`).
+        lower_bound: no tour is shorter (:func:`subtask_opt.tour.bound.lower_bound`).
         gap_bound: ``(length - lower_bound) / lower_bound``: the tour is at most
             this fraction above the optimum (0 means proven optimal).
         runtime_s: wall time of the search and the bound together.
@@ -568,15 +568,16 @@ def solve_tsp(instance: TspInstance, *, time_limit: float = 10.0, seed: int = 0,
 
     The search stops at the solver's default stop (its ``NoImprovement``) or
     after ``time_limit`` seconds, whichever comes first; then
-    :func:`~subtask_opt.arm.bound.lower_bound` runs with the tour's length as
+    :func:`~subtask_opt.tour.bound.lower_bound` runs with the tour's length as
     its upper value, for at most ``bound_iterations`` steps and for what the
     search left of ``time_limit`` but at least :data:`BOUND_SHARE` of it. So the
     whole call takes at most about ``(1 + BOUND_SHARE) * time_limit``; only the
     bound (never the tour) may then depend on the machine's speed.
     """
-    from subtask_opt.arm.bound import DEFAULT_ITERATIONS, lower_bound
-    from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
     from subtask_opt.base.stop import MaxRuntime
+    from subtask_opt.tour.bound import DEFAULT_ITERATIONS, lower_bound
+    from subtask_opt.tour.problem import MatrixProblem
+    from subtask_opt.tour.solve import SolverParams, solve
 
     if not isinstance(instance, TspInstance):
         raise ParameterError(f"solve_tsp needs a TspInstance, got {type(instance).__name__}")
@@ -586,7 +587,7 @@ def solve_tsp(instance: TspInstance, *, time_limit: float = 10.0, seed: int = 0,
     require_int("solve_tsp", "bound_iterations", iterations, 1)
     started = time.perf_counter()
     params = SolverParams()
-    problem = SequencingProblem.from_matrix(instance.matrix)
+    problem = MatrixProblem(instance.matrix)
     result = solve(problem, seed=seed, params=params, progress=progress,
                    stop=[*params.default_stop(), MaxRuntime(float(time_limit))])
     length = instance.tour_length(result.order)

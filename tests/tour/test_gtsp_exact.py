@@ -7,8 +7,8 @@ import itertools
 import numpy as np
 import pytest
 
-from subtask_opt.arm.exact import _pair_cuts, gtsp_optimum, milp_optimum
 from subtask_opt.base.errors import ParameterError, SubtaskOptError
+from subtask_opt.tour.exact import _pair_cuts, gtsp_optimum, milp_optimum
 
 
 def _instance(seed: int, sizes: list[int], metric: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -7,10 +7,10 @@ given by :attr:`subtask_opt.arm.timing.models.TimingResult.branch_times` as an
 (N, 2, N, 2) tensor. For a fixed cyclic order the best configurations follow
 exactly from a dynamic programme (:func:`best_configurations`); the micro-GA
 searches over orders and decodes each one this way
-(:mod:`subtask_opt.arm._configuration_kernels`), so it optimises the order and the
+(:mod:`subtask_opt.tour.clustered`), so it optimises the order and the
 configurations together.
 
-Use it through ``SequencingProblem(..., time_model="joint",
+Use it through ``PlanarProblem(..., time_model="joint",
 configurations="optimize")``.
 """
 
@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm import _configuration_kernels as _gc
-from subtask_opt.arm._configuration_kernels import ConfiguredData
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.ga.permutation import SEARCH_FAST, neighbour_table
+from subtask_opt.tour import clustered as _gc
+from subtask_opt.tour.clustered import ConfiguredData
+from subtask_opt.tour.permutation import SEARCH_FAST, neighbour_table
 
 
 def _validated_tensor(branch_times: Any) -> np.ndarray:
@@ -160,27 +160,25 @@ def induced_matrix(branch_times: Any, configurations: Any) -> np.ndarray:
     return m
 
 
-def configuration_graph(branch_times: Any, branch_joints: Any
+def configuration_graph(branch_times: Any, present: Any
                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The generalised TSP as a graph over the configurations within the joint limits.
+    """The generalised TSP as a graph over the nodes that exist.
 
     Args:
-        branch_times: (N, 2, N, 2) leg times ``[i, ci, j, cj]``.
-        branch_joints: (N, 2, 2) joint angles per subtask and configuration (NaN where a
-            configuration is outside the limits).
+        branch_times: (N, K, N, K) costs ``[i, ci, j, cj]``.
+        present: (N, K) bool, which nodes exist (for an arm: the configurations within
+            the joint limits).
 
     Returns:
-        ``(cost, subtask, configuration)``: the (M, M) leg times between the M reachable
-        configurations (zero between two of one subtask), and each node's subtask and
-        configuration index, nodes grouped by subtask in index order (what
-        :func:`subtask_opt.arm.exact.gtsp_optimum` takes).
+        ``(cost, cluster, node)``: the (M, M) costs between the M present nodes (zero
+        between two of one cluster), and each node's cluster and index in it, grouped by
+        cluster in index order (what :func:`subtask_opt.tour.exact.gtsp_optimum` takes).
     """
     t = _validated_tensor(branch_times)
-    joints = np.asarray(branch_joints, dtype=float)
-    if joints.shape[:2] != t.shape[:2]:
-        raise ParameterError(f"branch_joints must have shape ({t.shape[0]}, 2, dof), got "
-                             f"{joints.shape}")
-    subtask, configuration = np.nonzero(np.isfinite(joints).all(axis=2))
+    mask = np.asarray(present, dtype=bool)
+    if mask.shape != t.shape[:2]:
+        raise ParameterError(f"present must have shape {t.shape[:2]}, got {mask.shape}")
+    subtask, configuration = np.nonzero(mask)
     cost = t[subtask[:, None], configuration[:, None], subtask[None, :], configuration[None, :]]
     cost[subtask[:, None] == subtask[None, :]] = 0.0
     return cost, subtask, configuration

@@ -7,20 +7,14 @@ import itertools
 import numpy as np
 import pytest
 
-from subtask_opt import (
-    MaxGenerations,
-    NoImprovement,
-    SequencingProblem,
-    SolverParams,
-    TargetCost,
-    builtin_case,
-    load_arm,
-    solve,
-)
-from subtask_opt.arm.exact import held_karp, milp_optimum
-from subtask_opt.arm.sequencing import CONFIGURED_RUNS, proven_configured_optimum
+from subtask_opt import MaxGenerations, NoImprovement, SolverParams, TargetCost, builtin_case, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.tour.exact import held_karp, milp_optimum
+from subtask_opt.tour.problem import MatrixProblem
+from subtask_opt.tour.solve import CONFIGURED_RUNS, proven_configured_optimum
 from tests.conftest import size
 
 
@@ -31,14 +25,14 @@ def _euclidean(seed: int, n: int) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def arm():
-    return load_arm("planar_2r")
+    return load_planar_arm("planar_2r")
 
 
 @pytest.mark.parametrize("seed", range(8))
 def test_default_preset_matches_held_karp_on_small_instances(seed):
     n = 5 + seed
     m = _euclidean(seed, n)
-    result = solve(SequencingProblem.from_matrix(m), seed=seed)
+    result = solve(MatrixProblem(m), seed=seed)
     assert result.total_time == pytest.approx(held_karp(m)[0], rel=1e-12)
 
 
@@ -47,7 +41,7 @@ def test_default_preset_matches_held_karp_on_asymmetric_instances(seed):
     rng = np.random.default_rng(seed)
     m = rng.random((8, 8)) * 5
     np.fill_diagonal(m, 0)
-    problem = SequencingProblem.from_matrix(m)
+    problem = MatrixProblem(m)
     assert not problem.symmetric
     result = solve(problem, seed=seed)
     assert result.total_time == pytest.approx(held_karp(m)[0], rel=1e-12)
@@ -55,7 +49,7 @@ def test_default_preset_matches_held_karp_on_asymmetric_instances(seed):
 
 def test_paper_preset_reaches_the_optimum_of_a_small_instance():
     m = _euclidean(11, 8)
-    result = solve(SequencingProblem.from_matrix(m), seed=3, params=SolverParams.paper(),
+    result = solve(MatrixProblem(m), seed=3, params=SolverParams.paper(),
                    stop=[MaxGenerations(3000)])
     assert result.total_time == pytest.approx(held_karp(m)[0], rel=1e-12)
     assert result.restarts > 0
@@ -65,7 +59,7 @@ def test_paper_preset_reaches_the_optimum_of_a_small_instance():
                                              ("random30", "paper")])
 def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
     # fixed configurations: the MILP certifies the optimum of this very matrix
-    problem = SequencingProblem(builtin_case(case, arm, seed=0), arm, time_model=model,
+    problem = PlanarProblem(builtin_case(case, arm, seed=0), arm, time_model=model,
                                 configurations="fixed")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=0)
@@ -73,7 +67,7 @@ def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
 
 
 def test_result_is_consistent(arm):
-    problem = SequencingProblem(builtin_case("square20", arm), arm, time_model="trapezoid",
+    problem = PlanarProblem(builtin_case("square20", arm), arm, time_model="trapezoid",
                                 first=7)
     r = solve(problem, seed=4, params=SolverParams(bound_max_nodes=0))  # no early bound stop
     assert r.order[0] == 7
@@ -90,7 +84,7 @@ def test_result_is_consistent(arm):
 
 
 def test_same_seed_same_result(arm):
-    problem = SequencingProblem(builtin_case("random30", arm, seed=2), arm)
+    problem = PlanarProblem(builtin_case("random30", arm, seed=2), arm)
     for params in (SolverParams(), SolverParams.paper()):
         gens = MaxGenerations(size(200, 15))
         a = solve(problem, seed=9, params=params, stop=gens)
@@ -101,7 +95,7 @@ def test_same_seed_same_result(arm):
 
 
 def test_choosing_configurations_makes_several_shorter_runs(arm):
-    problem = SequencingProblem(builtin_case("random30", arm, seed=2), arm)
+    problem = PlanarProblem(builtin_case("random30", arm, seed=2), arm)
     assert problem.optimizes_configurations  # the default joint model chooses the elbows
     fixed_stall = SolverParams().default_stop(30)[0]
     stall = SolverParams().default_stop(30, configured=True)[0]
@@ -125,7 +119,7 @@ def test_choosing_configurations_makes_several_shorter_runs(arm):
 
 def test_stopping_criteria_are_honoured():
     m = _euclidean(5, 25)
-    problem = SequencingProblem.from_matrix(m)
+    problem = MatrixProblem(m)
     assert solve(problem, seed=0, stop=MaxGenerations(17),
                  params=SolverParams.paper()).generations == 17
     r = solve(problem, seed=0, stop=[NoImprovement(5), MaxGenerations(10_000)])
@@ -143,7 +137,7 @@ def test_stopping_criteria_are_honoured():
 ])
 def test_bad_matrices_are_rejected(matrix, match):
     with pytest.raises(InputDataError, match=match):
-        SequencingProblem.from_matrix(matrix)
+        MatrixProblem(matrix)
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
@@ -152,7 +146,7 @@ def test_bad_matrices_are_rejected(matrix, match):
 ])
 def test_bad_solve_arguments_are_rejected(kwargs, match):
     with pytest.raises(ParameterError, match=match):
-        solve(SequencingProblem.from_matrix(_euclidean(0, 5)), **kwargs)
+        solve(MatrixProblem(_euclidean(0, 5)), **kwargs)
 
 
 @pytest.mark.parametrize(("kwargs", "field"), [
@@ -169,18 +163,18 @@ def test_bad_solver_params_name_the_field(kwargs, field):
 
 def test_bad_first_subtask_and_missing_inputs(arm):
     with pytest.raises(ParameterError, match="first"):
-        SequencingProblem.from_matrix(_euclidean(0, 5), first=5)
+        MatrixProblem(_euclidean(0, 5), first=5)
     with pytest.raises(ParameterError, match="subtasks must be a SubtaskSet"):
-        SequencingProblem(None, arm)
-    with pytest.raises(ParameterError, match="load_arm"):
-        SequencingProblem(builtin_case("square20", arm), "planar_2r")
+        PlanarProblem(None, arm)
+    with pytest.raises(ParameterError, match="load_planar_arm"):
+        PlanarProblem(builtin_case("square20", arm), "planar_2r")
     with pytest.raises(ParameterError, match="permutation"):
-        SequencingProblem.from_matrix(_euclidean(0, 5)).tour_time(np.array([0, 1, 1, 2, 3]))
+        MatrixProblem(_euclidean(0, 5)).tour_time(np.array([0, 1, 1, 2, 3]))
 
 
 @pytest.mark.parametrize("seed", range(4))
 def test_lower_bound_is_below_the_certified_optimum_and_the_answer(arm, seed):
-    problem = SequencingProblem(random_subtasks(arm, 12 + seed, seed=seed), arm,
+    problem = PlanarProblem(random_subtasks(arm, 12 + seed, seed=seed), arm,
                                 time_model="trapezoid")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=seed, certify=True)
@@ -213,8 +207,8 @@ def _gtsp_brute_force(problem) -> float:
 
 @pytest.mark.parametrize(("robot", "seed"), [("planar_2r", 3), ("asr_twodof", 4)])
 def test_chosen_configurations_are_certified_against_brute_force(robot, seed):
-    arm = load_arm(robot)
-    problem = SequencingProblem(random_subtasks(arm, 7, seed=seed), arm, time_model="joint")
+    arm = load_planar_arm(robot)
+    problem = PlanarProblem(random_subtasks(arm, 7, seed=seed), arm, time_model="joint")
     assert problem.optimizes_configurations
     optimum = _gtsp_brute_force(problem)
     result = solve(problem, seed=0, certify=True)
@@ -228,7 +222,7 @@ def test_chosen_configurations_are_certified_against_brute_force(robot, seed):
 
 
 def test_no_bound_above_the_size_limit(arm):
-    problem = SequencingProblem(random_subtasks(arm, 12, seed=1), arm, time_model="trapezoid")
+    problem = PlanarProblem(random_subtasks(arm, 12, seed=1), arm, time_model="trapezoid")
     result = solve(problem, seed=0, params=SolverParams(bound_max_nodes=0))
     assert result.lower_bound is None and result.gap_bound is None
 
@@ -241,8 +235,8 @@ def test_default_settings_reach_the_certified_optimum_of_new_40_and_60_subtask_s
         robot, model, n, seed):
     # held-out sets (not the built-in cases the defaults were tuned on); the MILP
     # certifies the optimum of the fixed-configuration matrix
-    arm = load_arm(robot)
-    problem = SequencingProblem(random_subtasks(arm, n, seed=1000 + seed), arm, time_model=model,
+    arm = load_planar_arm(robot)
+    problem = PlanarProblem(random_subtasks(arm, n, seed=1000 + seed), arm, time_model=model,
                                 configurations="fixed")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=seed)
@@ -250,9 +244,9 @@ def test_default_settings_reach_the_certified_optimum_of_new_40_and_60_subtask_s
 
 
 def test_report_checks_the_tour_legs_and_all_pairs_only_when_asked():
-    arm = load_arm("asr_twodof")
+    arm = load_planar_arm("asr_twodof")
     subtasks = builtin_case("random30", arm, seed=1)
-    problem = SequencingProblem(subtasks, arm, time_model="trapezoid")
+    problem = PlanarProblem(subtasks, arm, time_model="trapezoid")
     r = solve(problem, seed=0, stop=MaxGenerations(2))
     # oracle: the all-pairs check of the same problem read at the tour's legs
     check = problem.timing.leg_check
@@ -265,8 +259,8 @@ def test_report_checks_the_tour_legs_and_all_pairs_only_when_asked():
     assert report["tour_leg_check"]["n_impossible"] == int(impossible.sum()) > 0
     assert report["tour_leg_check"]["n_overspeed"] == int(over.sum())
     assert "all_pairs_leg_check" not in report["diagnostics"]
-    asked = SequencingProblem(subtasks, arm, time_model="trapezoid", check_all_legs=True)
+    asked = PlanarProblem(subtasks, arm, time_model="trapezoid", check_all_legs=True)
     diag = solve(asked, seed=0, stop=MaxGenerations(2)).report.diagnostics
     assert diag["all_pairs_leg_check"]["n_infeasible"] == check.n_infeasible
     with pytest.raises(ParameterError, match="check_all_legs"):
-        SequencingProblem(subtasks, arm, time_model="trapezoid", check_all_legs=1)
+        PlanarProblem(subtasks, arm, time_model="trapezoid", check_all_legs=1)

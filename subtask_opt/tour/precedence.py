@@ -20,7 +20,7 @@ infeasible tour (:func:`tour_cost` still returns ``inf`` for one, as a guard):
 
 ``data`` is the (N, N) cost matrix (asymmetric allowed; the return leg to the
 first node is an ordinary leg, so open paths are zero-cost returns, see
-:mod:`subtask_opt.arm.constraints`). ``aux`` is a :class:`PinnedAux` built by
+:mod:`subtask_opt.tour.constraints`). ``aux`` is a :class:`PinnedAux` built by
 :func:`make_pinned_aux`: the pins and the predecessor and successor lists in CSR form.
 """
 
@@ -31,8 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.ga.dispatch import OperatorSet, register
-from subtask_opt.ga.kinds import Kind
+from subtask_opt.ga.dispatch import OperatorSet
 
 MAX_SEGMENT = 8
 """The longest run of nodes Or-opt moves (segment moves of this length cover the
@@ -427,5 +426,5 @@ def improve(genes, length, data, aux):
     return local_search(genes, length, data, aux)
 
 
-register(Kind.PINNED_PERMUTATION,
-         OperatorSet(randomize, tour_cost, crossover, no_mutation, improve))
+OPERATORS = OperatorSet(randomize, tour_cost, crossover, no_mutation, improve)
+"""The pinned permutation kind's operators (registered by :mod:`subtask_opt.chromosomes`)."""

@@ -9,12 +9,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.configurations import best_configurations, induced_matrix, pack_data
-from subtask_opt.arm.model import load_arm
-from subtask_opt.arm.sequencing import SequencingProblem, SolverParams, solve
+from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 from subtask_opt.base.stop import MaxGenerations
+from subtask_opt.chromosomes import use
+from subtask_opt.tour.configurations import best_configurations, induced_matrix, pack_data
+from subtask_opt.tour.solve import SolverParams
 from tests.conftest import size
 
 _ARMS: dict = {}
@@ -22,7 +24,7 @@ _ARMS: dict = {}
 
 def _arm(name: str):
     if name not in _ARMS:
-        _ARMS[name] = load_arm(name)
+        _ARMS[name] = load_planar_arm(name)
     return _ARMS[name]
 
 
@@ -79,12 +81,12 @@ def _ga_on_tensor(t: np.ndarray, seed: int) -> float:
     from subtask_opt.ga.config import GAConfig
     from subtask_opt.ga.kinds import Kind
     from subtask_opt.ga.loop import run_ga
-    from subtask_opt.ga.permutation import SEARCH_FAST, make_aux, neighbour_table
+    from subtask_opt.tour.permutation import SEARCH_FAST, make_aux, neighbour_table
 
     n = t.shape[0]
     data, _ = pack_data(t)
     aux = make_aux(neighbour_table(data.dist), nearest_fallback=True, search=SEARCH_FAST)
-    out = run_ga(Kind.CONFIGURED_PERMUTATION, GAConfig(), data, aux, max_genes=n, seed=seed,
+    out = run_ga(use(Kind.CONFIGURED_PERMUTATION), GAConfig(), data, aux, max_genes=n, seed=seed,
                  criteria=[NoImprovement(15), MaxGenerations(50_000)])
     cost, _ = best_configurations(out.genes, t)
     return cost
@@ -97,7 +99,7 @@ def _ga_on_tensor(t: np.ndarray, seed: int) -> float:
 def test_joint_aware_solution_equals_brute_force(robot: str, model: str, n: int,
                                                  seed: int) -> None:
     arm = _arm(robot)
-    problem = SequencingProblem(random_subtasks(arm, n, seed=seed), arm, time_model=model,
+    problem = PlanarProblem(random_subtasks(arm, n, seed=seed), arm, time_model=model,
                                 configurations="optimize")
     result = solve(problem, seed=seed)
     assert result.total_time == pytest.approx(_brute_force(problem.timing.branch_times),
@@ -118,8 +120,8 @@ def test_joint_aware_solution_equals_brute_force(robot: str, model: str, n: int,
 def test_optimizing_is_never_worse_than_a_fixed_branch() -> None:
     arm = _arm("planar_2r")
     s = random_subtasks(arm, 20, seed=4)
-    fixed = solve(SequencingProblem(s, arm, time_model="joint", configurations="fixed"), seed=0)
-    free = solve(SequencingProblem(s, arm, time_model="joint", configurations="optimize"),
+    fixed = solve(PlanarProblem(s, arm, time_model="joint", configurations="fixed"), seed=0)
+    free = solve(PlanarProblem(s, arm, time_model="joint", configurations="optimize"),
                  seed=0)
     assert free.total_time <= fixed.total_time * (1 + 1e-12)
     assert free.report.configurations_mode == "optimize"
@@ -128,7 +130,7 @@ def test_optimizing_is_never_worse_than_a_fixed_branch() -> None:
 
 def test_same_seed_same_configured_result() -> None:
     arm = _arm("asr_twodof")
-    problem = SequencingProblem(random_subtasks(arm, size(25, 6), seed=1), arm,
+    problem = PlanarProblem(random_subtasks(arm, size(25, 6), seed=1), arm,
                                 time_model="line", configurations="optimize")
     gens = MaxGenerations(size(60, 15))
     for params in (SolverParams(), SolverParams.paper()):
@@ -144,7 +146,7 @@ def test_a_subtask_with_one_configuration_gets_it() -> None:
     # (-0.545, -0.198) lies behind the base: the shoulder limit leaves only elbow-up.
     pts = np.array([[-0.545, -0.198], [0.3, 0.1], [0.4, -0.2], [0.25, 0.3]])
     assert np.isnan(arm.ik(pts[0])[0]).all() and np.isfinite(arm.ik(pts[0])[1]).all()
-    problem = SequencingProblem(SubtaskSet(pts), arm, time_model="joint",
+    problem = PlanarProblem(SubtaskSet(pts), arm, time_model="joint",
                                 configurations="optimize")
     result = solve(problem, seed=0)
     assert result.report.configurations[0] == 1
@@ -156,7 +158,7 @@ def test_subtask_reachable_in_no_configuration_is_named() -> None:
     bx, by = arm.base_xy
     pts = np.array([[bx + 0.15, by], [bx, by + 0.15], [bx + 0.001, by]])  # inside the inner disc
     with pytest.raises(UnreachableError, match="subtask 2"):
-        SequencingProblem(SubtaskSet(pts), arm, time_model="joint", configurations="optimize")
+        PlanarProblem(SubtaskSet(pts), arm, time_model="joint", configurations="optimize")
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
@@ -167,7 +169,7 @@ def test_subtask_reachable_in_no_configuration_is_named() -> None:
 def test_bad_configuration_options(kwargs: dict, match: str) -> None:
     arm = _arm("planar_2r")
     with pytest.raises(ParameterError, match=match):
-        SequencingProblem(random_subtasks(arm, 4, seed=0), arm, **kwargs)
+        PlanarProblem(random_subtasks(arm, 4, seed=0), arm, **kwargs)
 
 
 def test_bad_tensors_and_orders() -> None:
