@@ -23,6 +23,11 @@ The element ``#status`` reads ``rendered frame 0 of F frames`` (attribute
 (``data-ok="0"``) when the script fails: the tests load the page in a headless
 Chromium and read it.
 
+Text from the inputs (the title, the robot's name, box names, file names) reaches the page
+only as HTML-escaped text (the title and heading) or inside the JSON document, where ``<``,
+``>``, ``&`` and U+2028/2029 are ``\\u`` escapes (:func:`script_json`), so it cannot end the
+``<script>`` element or become markup; the script shows strings with ``textContent`` only.
+
 The page's size is bounded: at most ``max_frames`` frames (default 2000,
 evenly spaced in the index, first and last kept) with coordinates rounded to
 0.1 mm, so about 50 bytes per joint per frame.
@@ -32,6 +37,7 @@ from __future__ import annotations
 
 import html
 import json
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -202,15 +208,49 @@ def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
     """
     data = tour_view_data(arm, times, q, targets=targets, axes=axes, scene=scene, title=title,
                           order=order, max_frames=max_frames)
-    # "</" cannot close the script element inside JSON once the slash is escaped.
-    blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
-    page = (_PAGE.replace("@TITLE@", html.escape(data["title"]))
-            .replace("@LINK_COLOUR@", LINK_COLOUR)
-            .replace("@DATA@", blob))
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page, encoding="utf-8")
+    out.write_text(render_page(data), encoding="utf-8")
     return out
+
+
+_SCRIPT_SAFE = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026",
+                              "\u2028": "\\u2028", "\u2029": "\\u2029"})
+_PLACEHOLDER = re.compile(r"@(TITLE|LINK_COLOUR|DATA)@")
+_SURROGATE = re.compile("[\ud800-\udfff]")
+
+
+def script_json(data: Any) -> str:
+    """``data`` as JSON that is inert inside a ``<script>`` element.
+
+    ``<``, ``>`` and ``&`` can only occur inside JSON strings (or keys), where ``\\u003c``
+    etc. mean the same characters to ``JSON.parse``; without them no ``</script>``,
+    ``<!--`` or ``<script`` can end the element or change how the HTML parser reads it.
+    U+2028/2029 are escaped too (line terminators in older JavaScript), and non-ASCII text
+    (lone surrogates included) travels as ``\\u`` escapes.
+    """
+    return json.dumps(data, separators=(",", ":"), allow_nan=False,
+                      ensure_ascii=True).translate(_SCRIPT_SAFE)
+
+
+def html_text(text: str) -> str:
+    """``text`` escaped for HTML text and attribute values; a lone surrogate (a file name
+    that was not UTF-8) becomes U+FFFD so that the page can be written as UTF-8."""
+    return html.escape(_SURROGATE.sub("\ufffd", text), quote=True)
+
+
+def render_page(data: dict[str, Any]) -> str:
+    """The HTML page for a :func:`tour_view_data` document.
+
+    The only text from the inputs in the page is the HTML-escaped title (``<title>`` and the
+    heading) and the JSON document (:func:`script_json`); the placeholders are filled in one
+    pass, so a title or a name that spells a placeholder stays text. The page's script puts
+    strings into the document with ``textContent`` (canvas labels with ``fillText``), never as
+    markup.
+    """
+    values = {"TITLE": html_text(data["title"]), "LINK_COLOUR": LINK_COLOUR,
+              "DATA": script_json(data)}
+    return _PLACEHOLDER.sub(lambda m: values[m.group(1)], _PAGE)
 
 
 _PAGE = r"""<!DOCTYPE html>

@@ -134,7 +134,13 @@ def save_comparison_figure(path: str | Path, cases: Sequence[Any], rows: Sequenc
         plot_grid(case.world, results, start=case.start, goal=case.goal, ax=ax)
     for ax in axes.ravel()[n:]:
         ax.remove()
-    fig.suptitle("grid planners on the six 14x9 maps (thesis Tables 4.2-4.7)")
+    touch = list(dict.fromkeys(r.planner for r in rows if r.corner_cutting))
+    closed = list(dict.fromkeys(r.planner for r in rows if not r.corner_cutting))
+    rules = "; ".join(part for part in (
+        f"{', '.join(touch)}: a move may touch a blocked corner (thesis)" if touch else "",
+        f"{', '.join(closed)}: no move touches a blocked cell" if closed else "") if part)
+    fig.suptitle("grid planners on the six 14x9 maps (thesis Tables 4.2-4.7)"
+                 + (f"\ncorner rules: {rules}" if rules else ""))
     fig.tight_layout()
     return _save(fig, path, dpi=110)
 

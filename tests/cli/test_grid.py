@@ -10,6 +10,8 @@ from PIL import Image
 
 from subtask_opt.cli.app import main
 from subtask_opt.planners.base import planners
+from subtask_opt.planners.grid.distance_transform import MDTParams, plan_mdt
+from subtask_opt.planners.grid.maps import thesis_case
 from tests.conftest import REDUCED
 from tests.planners.grid.test_fig24 import PRINTED
 
@@ -187,6 +189,14 @@ def test_bench_grid(tmp_path, capsys):
     assert data["planners"] == list(planners("grid"))
     assert len(rows) == 6 * len(planners("grid"))
     mdt = {r["map"]: r["length"] for r in rows if r["planner"] == "mdt"}
+    dt = {r["map"]: r["length"] for r in rows if r["planner"] == "dt"}
     ga = {r["map"]: r["length"] for r in rows if r["planner"] == "ga"}
-    assert all(ga[m] <= 1.05 * mdt[m] for m in mdt)
+    # one corner rule per comparison: DT and MDT take the thesis', the GA closed squares
+    cut = {r["planner"]: r["corner_cutting"] for r in rows}
+    assert cut["dt"] is cut["mdt"] is True and cut["ga"] is False
+    assert all(mdt[m] <= dt[m] + 1e-9 for m in mdt)
+    closed = {m: plan_mdt(c.world, c.start, c.goal,
+                          params=MDTParams(corner_cutting=False)).length
+              for m, c in ((m, thesis_case(m)) for m in mdt)}
+    assert all(ga[m] <= 1.05 * closed[m] for m in mdt)
     assert "cluttered" in capsys.readouterr().out and plot.stat().st_size > 0

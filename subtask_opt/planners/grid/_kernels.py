@@ -7,9 +7,11 @@ centres that is :func:`segment_hits` (exact integer arithmetic); for the
 driven robot of VFF/VFH it is :func:`move_clear` (the same closed-square test
 in floats). An 8-connected diagonal step touches the shared corner of its two
 side cells, so the rule asks both to be free (no corner cutting). The one
-deliberate exception is the thesis' own 3:4 transform (Fig. 2.4), which may pass
-one blocked corner (``cut``); no planner ever passes between two blocked cells
-that touch at a corner.
+deliberate exception is the thesis' own rule (Fig. 2.4), which the 3:4 transform
+and the MDT take with ``cut``: a move may touch a blocked cell at a corner (enter
+no blocked cell's open square), as a diagonal step past one blocked side cell does
+(:func:`segment_clear`); no planner ever passes between two blocked cells that
+touch at a corner.
 """
 
 from __future__ import annotations
@@ -389,7 +391,7 @@ def _next_neighbour(blocked, dist, x, y, w_side, w_diag, cut):
 
 
 @njit(cache=True)
-def _next_realising(blocked, dist, x, y):
+def _next_realising(blocked, dist, x, y, cut):
     """:func:`visibility_descend`'s step: the visible cell of least value among
     those with value + segment length = the current value."""
     h, w = blocked.shape
@@ -406,14 +408,14 @@ def _next_realising(blocked, dist, x, y):
             ddy = ny - y
             if val + math.sqrt(ddx * ddx + ddy * ddy) > cur + tol:
                 continue
-            if segment_hits(blocked, x, y, nx, ny, True) == 0:
+            if segment_clear(blocked, x, y, nx, ny, cut):
                 best_val = val
                 bx, by = nx, ny
     return bx, by, best_val
 
 
 @njit(cache=True)
-def _next_least_visible(blocked, dist, x, y):
+def _next_least_visible(blocked, dist, x, y, cut):
     """:func:`descend_least_visible`'s step: the visible cell of least value
     (ties: the nearer one)."""
     h, w = blocked.shape
@@ -430,7 +432,7 @@ def _next_least_visible(blocked, dist, x, y):
             seg = math.sqrt(ddx * ddx + ddy * ddy)
             if seg == 0.0 or (val == best_val and seg >= best_len):
                 continue
-            if segment_hits(blocked, x, y, nx, ny, True) == 0:
+            if segment_clear(blocked, x, y, nx, ny, cut):
                 best_val = val
                 best_len = seg
                 bx, by = nx, ny
@@ -440,7 +442,8 @@ def _next_least_visible(blocked, dist, x, y):
 @njit(cache=True)
 def _descend(blocked, dist, sx, sy, rule, w_side, w_diag, cut):
     """Walk from (sx, sy) to the zero of ``dist``, one ``rule`` step at a time
-    (``w_side``, ``w_diag`` and ``cut`` matter to ``_RULE_NEIGHBOUR`` only).
+    (``w_side`` and ``w_diag`` matter to ``_RULE_NEIGHBOUR`` only; ``cut`` is the
+    corner rule of every rule's moves).
     Returns a (k, 2) int64 array of cells, or an empty one when the start is
     unreachable or a step finds no cell of smaller value (not a valid field)."""
     h, w = blocked.shape
@@ -455,9 +458,9 @@ def _descend(blocked, dist, sx, sy, rule, w_side, w_diag, cut):
         if rule == _RULE_NEIGHBOUR:
             bx, by, best_val = _next_neighbour(blocked, dist, x, y, w_side, w_diag, cut)
         elif rule == _RULE_REALISING:
-            bx, by, best_val = _next_realising(blocked, dist, x, y)
+            bx, by, best_val = _next_realising(blocked, dist, x, y, cut)
         else:
-            bx, by, best_val = _next_least_visible(blocked, dist, x, y)
+            bx, by, best_val = _next_least_visible(blocked, dist, x, y, cut)
         if bx < 0 or not best_val < dist[y, x]:
             return np.zeros((0, 2), dtype=np.int64)
         x, y = bx, by
@@ -525,6 +528,55 @@ def segment_hits(blocked, x0, y0, x1, y1, first_only):
 
 
 @njit(cache=True)
+def _segment_clear_open(blocked, x0, y0, x1, y1):
+    """The thesis' rule between cell centres: the segment enters no blocked cell's open
+    square and passes through no corner point between two blocked cells that touch
+    there (cells outside the grid count as blocked). Exact integer arithmetic, as
+    :func:`segment_hits`."""
+    if x0 > x1:
+        x0, y0, x1, y1 = x1, y1, x0, y0
+    dx = x1 - x0
+    dy = y1 - y0
+    if dx == 0:
+        # a column at a cell centre touches no other column
+        return _column_hits(blocked, x0, min(y0, y1), max(y0, y1), True) == 0
+    for cx in range(x0, x1 + 1):
+        xa = max(2 * x0, 2 * cx - 1)
+        xb = min(2 * x1, 2 * cx + 1)
+        na = 2 * y0 * dx + dy * (xa - 2 * x0)
+        nb = 2 * y0 * dx + dy * (xb - 2 * x0)
+        nlo = min(na, nb)
+        nhi = max(na, nb)
+        # rows whose open interval (cy - 1/2, cy + 1/2) meets (nlo, nhi) / (2 dx)
+        cy_lo = (nlo - dx) // (2 * dx) + 1
+        cy_hi = -((-(nhi + dx)) // (2 * dx)) - 1
+        if _column_hits(blocked, cx, cy_lo, cy_hi, True):
+            return False
+        if cx < x1 and nb % (2 * dx) == dx:
+            # through the corner point (cx + 1/2, k + 1/2): it goes from one cell to the
+            # diagonally opposite one and touches the other two at that point only
+            k = (nb - dx) // (2 * dx)
+            if dy > 0:
+                ax, ay, bx, by = cx + 1, k, cx, k + 1
+            else:
+                ax, ay, bx, by = cx, k, cx + 1, k + 1
+            if _column_hits(blocked, ax, ay, ay, True) and _column_hits(blocked, bx, by, by,
+                                                                           True):
+                return False
+    return True
+
+
+@njit(cache=True)
+def segment_clear(blocked, x0, y0, x1, y1, cut):
+    """Whether the straight move between cell centres is allowed: without ``cut`` it
+    touches no closed blocked square (:func:`segment_hits`); with ``cut`` (the thesis'
+    rule) it may touch blocked squares at a corner, never between two of them."""
+    if cut:
+        return _segment_clear_open(blocked, x0, y0, x1, y1)
+    return segment_hits(blocked, x0, y0, x1, y1, True) == 0
+
+
+@njit(cache=True)
 def _free_cells(blocked, gx, gy):
     """The free cells in row-major order: (xs, ys, index of (gx, gy) or -1)."""
     h, w = blocked.shape
@@ -558,11 +610,12 @@ def _to_grid(shape, xs, ys, values):
 
 
 @njit(cache=True)
-def visibility_field(blocked, gx, gy):
+def visibility_field(blocked, gx, gy, cut):
     """Any-angle distance field: Dijkstra on the line-of-sight graph.
 
     Vertices are the free cell centres, edges join every pair with a
-    collision-free straight segment, weighted by its Euclidean length. The
+    collision-free straight segment (:func:`segment_clear` with ``cut``),
+    weighted by its Euclidean length. The
     graph is dense, so the O(n^2) array Dijkstra (no heap) is the right one:
     settle the nearest cell, then relax every unsettled cell it can see.
     Returns the (h, w) field (``inf`` blocked or unreachable).
@@ -586,22 +639,22 @@ def visibility_field(blocked, gx, gy):
             ddx = xs[v] - ux
             ddy = ys[v] - uy
             nd = du + math.sqrt(ddx * ddx + ddy * ddy)
-            if nd < dist[v] and segment_hits(blocked, ux, uy, xs[v], ys[v], True) == 0:
+            if nd < dist[v] and segment_clear(blocked, ux, uy, xs[v], ys[v], cut):
                 dist[v] = nd
     return _to_grid(blocked.shape, xs, ys, dist)
 
 
 @njit(cache=True)
-def visibility_descend(blocked, dist, sx, sy):
+def visibility_descend(blocked, dist, sx, sy, cut):
     """Follow an any-angle field from (sx, sy): each jump goes to the visible
     cell of least value among those that realise the current value
     (value + segment length = current value), so the path has the field's
     length and as few waypoints as the field allows."""
-    return _descend(blocked, dist, sx, sy, _RULE_REALISING, 1.0, 1.0, False)
+    return _descend(blocked, dist, sx, sy, _RULE_REALISING, 1.0, 1.0, cut)
 
 
 @njit(cache=True)
-def visibility_levels(blocked, gx, gy):
+def visibility_levels(blocked, gx, gy, cut):
     """The thesis' own MDT fill (section 2.2.4), level by level.
 
     Level 1: every free cell that sees the goal gets its straight-line
@@ -632,7 +685,7 @@ def visibility_levels(blocked, gx, gy):
                 ddx = xs[c] - xs[u]
                 ddy = ys[c] - ys[u]
                 nd = value[u] + math.sqrt(ddx * ddx + ddy * ddy)
-                if nd < best and segment_hits(blocked, xs[u], ys[u], xs[c], ys[c], True) == 0:
+                if nd < best and segment_clear(blocked, xs[u], ys[u], xs[c], ys[c], cut):
                     best = nd
             if best < np.inf:
                 new_value[c] = best
@@ -646,12 +699,12 @@ def visibility_levels(blocked, gx, gy):
 
 
 @njit(cache=True)
-def descend_least_visible(blocked, dist, sx, sy):
+def descend_least_visible(blocked, dist, sx, sy, cut):
     """The thesis' step 5: from (sx, sy) jump to the visible cell of least
     value (ties: the nearer one) until the zero cell. Every cell of a level
     field sees the cell it was filled from, which holds a smaller value, so
     each jump lowers the value and the walk ends."""
-    return _descend(blocked, dist, sx, sy, _RULE_LEAST_VISIBLE, 1.0, 1.0, False)
+    return _descend(blocked, dist, sx, sy, _RULE_LEAST_VISIBLE, 1.0, 1.0, cut)
 
 
 # -- local planners: a simulated robot with a certainty grid ---------------------------

@@ -133,28 +133,38 @@ class CompareRow:
     message: str
     result: PlanResult
 
+    @property
+    def corner_cutting(self) -> bool:
+        """The row's corner rule: True for the thesis' (a move may touch a blocked
+        corner: ``dt`` and ``mdt`` by default), False for closed squares (the others)."""
+        return bool(self.result.info.get("corner_cutting", False))
+
     def to_dict(self) -> dict[str, Any]:
         return {"map": self.map, "planner": self.planner, "success": self.success,
                 "outcome": str(self.result.outcome), "time_s": self.time_s,
                 "length": self.length if self.success else None,
-                "turns": self.turns, "message": self.message}
+                "turns": self.turns, "corner_cutting": self.corner_cutting,
+                "message": self.message}
 
 
 def compare(world: GridWorld, start: Any, goal: Any, *,
             names: tuple[str, ...] | None = None, seed: int | None = None,
-            repeats: int = 3) -> list[CompareRow]:
+            repeats: int = 3, params: dict[str, Any] | None = None) -> list[CompareRow]:
     """Run each planner (``names``; None: every registered grid planner) on one
     map after a warm-up call (JIT compile kept out of the times); a row's time
     is the best of ``repeats`` runs with the same seed (runs of a seed are
-    identical, only the clock varies)."""
+    identical, only the clock varies). ``params`` maps a planner name to its
+    parameters (the others run with their defaults)."""
     require_int("compare", "repeats", repeats, 1, 10_000)
+    params = params or {}
     rows = []
     for name in names if names is not None else planner_names():
-        plan_grid(world, start, goal, name, seed=seed)  # warm-up
+        options = params.get(name)
+        plan_grid(world, start, goal, name, seed=seed, params=options)  # warm-up
         best: tuple[float, PlanResult] | None = None
         for _ in range(repeats):
             t0 = time.perf_counter()
-            res = plan_grid(world, start, goal, name, seed=seed)
+            res = plan_grid(world, start, goal, name, seed=seed, params=options)
             elapsed = time.perf_counter() - t0
             if best is None or elapsed < best[0]:
                 best = (elapsed, res)
@@ -166,13 +176,15 @@ def compare(world: GridWorld, start: Any, goal: Any, *,
 
 
 def format_table(rows: list[CompareRow]) -> str:
-    """Rows as a fixed-width text table."""
-    lines = [f"{'map':<10} {'planner':<9} {'time':>10} {'length':>8} {'turns':>5}  result",
-             "-" * 60]
+    """Rows as a fixed-width text table; ``corners`` is the row's corner rule (``touch``:
+    the thesis', a move may touch a blocked corner; ``closed``: it touches no blocked cell)."""
+    lines = [f"{'map':<10} {'planner':<9} {'time':>10} {'length':>8} {'turns':>5} "
+             f"{'corners':<7}  result", "-" * 68]
     for r in rows:
         t = f"{r.time_s * 1e3:.3f} ms"
         length = f"{r.length:.2f}" if r.success else "-"
         turns = str(r.turns) if r.success else "-"
-        lines.append(f"{r.map:<10} {r.planner:<9} {t:>10} {length:>8} {turns:>5}  "
-                     f"{'ok' if r.success else r.message}")
+        corners = "touch" if r.corner_cutting else "closed"
+        lines.append(f"{r.map:<10} {r.planner:<9} {t:>10} {length:>8} {turns:>5} "
+                     f"{corners:<7}  {'ok' if r.success else r.message}")
     return "\n".join(lines)

@@ -18,12 +18,19 @@ Registered planners (family ``"grid"``):
   centres. ``MDTParams(fill="exact")`` (default) is Dijkstra on the
   line-of-sight graph; ``fill="levels"`` is the thesis' own procedure
   (section 2.2.4: level 1 = cells that see the goal, level k + 1 = cells that
-  see a level-k cell, never revisited), which can be longer.
+  see a level-k cell, never revisited), which can be longer. By default it
+  takes the ``dt``'s corner rule, the thesis' (a segment may touch a blocked
+  cell at a corner); ``MDTParams(corner_cutting=False)`` forbids it.
 
-No move ever passes between two blocked cells that touch at a corner; apart
-from the chamfer option above, a move touches no closed blocked square (see
-:mod:`._kernels`), so every 8-connected path is also an any-angle path and the
-exact MDT is never longer than either transform.
+Two corner rules (the transforms name theirs in ``info["corner_cutting"]``): the
+thesis' (``dt`` and ``mdt`` by default: a move may touch a blocked cell at a corner
+but enter no blocked cell) and the closed-square rule of MovingAI (``dt-octile``,
+the two with ``corner_cutting=False``, and the GA, VFF and VFH planners: a move
+touches no blocked square at all); see :mod:`._kernels`. No move ever passes
+between two blocked cells that touch at a corner. Under one rule every
+8-connected path is also an any-angle path, so the exact MDT is never longer
+than a transform of the same rule (and the thesis-rule MDT never longer than any
+of them).
 """
 
 from __future__ import annotations
@@ -90,16 +97,24 @@ class MDTParams:
         max_free_cells: both fills test pairs of free cells for line of sight
             (O(n^2) tests); grids with more free cells are refused rather than
             left running for hours.
+        corner_cutting: True (default, the thesis' rule, as the ``dt``'s): a
+            segment may touch a blocked cell at a corner, never pass between two
+            blocked cells touching there; False: it touches no blocked square
+            (the closed-square rule of ``dt-octile`` and MovingAI).
     """
 
     fill: str = "exact"
     max_free_cells: int = 20000
+    corner_cutting: bool = True
 
     def __post_init__(self) -> None:
         if self.fill not in FILLS:
             raise ParameterError(
                 f"MDTParams.fill must be one of {', '.join(FILLS)}, got {self.fill!r}")
         require_int("MDTParams", "max_free_cells", self.max_free_cells, 1)
+        if not isinstance(self.corner_cutting, bool):
+            raise ParameterError(f"MDTParams.corner_cutting must be True or False, "
+                                 f"got {self.corner_cutting!r}")
 
 
 def _weights(metric: str) -> tuple[float, float, float]:
@@ -113,14 +128,24 @@ def _blocked(world: GridWorld) -> np.ndarray:
     return world.occupancy.view(np.uint8)
 
 
+def _mdt_params(fill: str, corner_cutting: bool | None, max_free_cells: int = 20000
+                ) -> MDTParams:
+    """Validated any-angle options; ``corner_cutting=None``: the MDT's default."""
+    if corner_cutting is None:
+        return MDTParams(fill, max_free_cells)
+    return MDTParams(fill, max_free_cells, corner_cutting)
+
+
 def distance_field(world: GridWorld, goal: Any, metric: str = "octile", *,
                    corner_cutting: bool | None = None, fill: str = "exact",
                    stop_at: Any = None, max_free_cells: int = 20000) -> np.ndarray:
     """Distance from every cell to ``goal``, shape (height, width), in cells.
 
-    Blocked and unreachable cells hold ``inf``. ``corner_cutting`` applies to
-    the 8-connected metrics (see :class:`DTParams`), ``fill`` and
-    ``max_free_cells`` to ``"anyangle"`` (see :class:`MDTParams`).
+    Blocked and unreachable cells hold ``inf``. ``corner_cutting`` is the
+    corner rule (None: the metric's convention, True for ``chamfer34`` and
+    ``anyangle``, the thesis' rule; False for ``octile``; see :class:`DTParams`
+    and :class:`MDTParams`); ``fill`` and ``max_free_cells`` apply to
+    ``"anyangle"``.
     ``stop_at`` (an iterable of cells (x, y), 8-connected metrics only) ends
     the transform as soon as those cells are final, which is what a single
     query needs; cells not yet final then hold ``inf``.
@@ -135,14 +160,14 @@ def distance_field(world: GridWorld, goal: Any, metric: str = "octile", *,
     gx, gy = world.check_cell("goal", goal)
     blocked = _blocked(world)
     if metric == "anyangle":
-        MDTParams(fill, max_free_cells)
+        cut = _mdt_params(fill, corner_cutting, max_free_cells).corner_cutting
         if stop_at is not None:
             raise ParameterError("distance_field: stop_at is only for the 8-connected metrics")
         check_small_grid(world, max_free_cells, "the any-angle transform checks every pair "
                                                 "of free cells")
         if fill == "levels":
-            return K.visibility_levels(blocked, gx, gy)
-        return K.visibility_field(blocked, gx, gy)
+            return K.visibility_levels(blocked, gx, gy, cut)
+        return K.visibility_field(blocked, gx, gy, cut)
     cut = DTParams(metric, corner_cutting).cuts_corners
     targets = _EMPTY_TARGETS
     if stop_at is not None:
@@ -166,7 +191,8 @@ def path_from_field(world: GridWorld, field: np.ndarray, start: Any,
     8-connected metrics: to the neighbour the value came from. ``anyangle``:
     ``fill="exact"`` jumps to the visible cell that realises the value (the
     path has the field's length); ``fill="levels"`` follows the thesis' step 5
-    (jump to the visible cell of least value). Returns a (k, 2) int array of
+    (jump to the visible cell of least value). ``corner_cutting`` must be the
+    field's (as for :func:`distance_field`). Returns a (k, 2) int array of
     cells (x, y), start first; empty when the start cannot reach the goal.
     """
     if metric not in METRICS:
@@ -179,10 +205,10 @@ def path_from_field(world: GridWorld, field: np.ndarray, start: Any,
             f"field shape {field.shape} does not match the grid {world.occupancy.shape}")
     blocked = _blocked(world)
     if metric == "anyangle":
-        MDTParams(fill)
+        cut = _mdt_params(fill, corner_cutting).corner_cutting
         if fill == "levels":
-            return K.descend_least_visible(blocked, field, sx, sy)
-        return K.visibility_descend(blocked, field, sx, sy)
+            return K.descend_least_visible(blocked, field, sx, sy, cut)
+        return K.visibility_descend(blocked, field, sx, sy, cut)
     cut = DTParams(metric, corner_cutting).cuts_corners
     side, diag, scale = _weights(metric)
     return K.descend(blocked, field * scale, sx, sy, side, diag, cut)
@@ -263,13 +289,15 @@ def _plan_metric(name: str, metric: str, other: str, world: GridWorld, start: An
     return plan(world, start, goal, params=params, seed=seed, stop=stop)
 
 
-@register("grid", "mdt", description="modified (any-angle) distance transform, exact or levels")
+@register("grid", "mdt", description="modified (any-angle) distance transform, exact or "
+                                    "levels (thesis; corner cutting)")
 def plan_mdt(world: GridWorld, start: Any, goal: Any, *, params: MDTParams | None = None,
              seed: int | None = None, stop: Any = None) -> PlanResult:
     """The modified distance transform (see :class:`MDTParams`); deterministic.
 
-    ``info`` holds ``metric`` (``"anyangle"``), ``fill`` and ``field_value``
-    (the field at the start; for ``fill="exact"`` it equals the path length).
+    ``info`` holds ``metric`` (``"anyangle"``), ``fill``, ``corner_cutting`` and
+    ``field_value`` (the field at the start; for ``fill="exact"`` it equals the path
+    length).
 
     Raises:
         UnreachableError: start or goal outside the grid or blocked.
@@ -277,5 +305,7 @@ def plan_mdt(world: GridWorld, start: Any, goal: Any, *, params: MDTParams | Non
     """
     params = params or MDTParams()
     _no_seed_no_stop("mdt", seed, stop)
-    return _field_plan(world, start, goal, "mdt", "anyangle", {"fill": params.fill},
-                       fill=params.fill, max_free_cells=params.max_free_cells)
+    return _field_plan(world, start, goal, "mdt", "anyangle",
+                       {"fill": params.fill, "corner_cutting": params.corner_cutting},
+                       fill=params.fill, max_free_cells=params.max_free_cells,
+                       corner_cutting=params.corner_cutting)

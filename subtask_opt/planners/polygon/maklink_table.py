@@ -7,10 +7,11 @@ Dijkstra route passes every obstacle on the same side as the optimal path
 exact optimum from the visibility graph.
 
 The paper does not state its start and goal. ``benchmarks/maklink.py
---search`` found a set-up that reproduces its figures (Dijkstra 507.6910,
-improved 472.5326, PSO 439.0011; ant colony system 439.372) within 0.04 %:
+--search`` fitted a set-up to its figures (Dijkstra 507.6910, improved
+472.5326, PSO 439.0011; ant colony system 439.372), matched within 0.04 %:
 world ``seed003-listed`` (the first obstacle in its listed, self-crossing
-vertex order) and :data:`PAPER_PAIR`. On the convex-hull world no pair comes
+vertex order) and :data:`PAPER_PAIR`. A fit, not a reproduction: the paper's
+own start and goal remain unknown. On the convex-hull world no pair comes
 within 2 %. :data:`SEED003_PAIRS` are this project's own choices.
 """
 
@@ -39,7 +40,7 @@ SEED003_PAIRS: tuple[tuple[tuple[float, float], tuple[float, float]], ...] = (
     ((140.0, 5.0), (260.0, 300.0)),
 )
 
-#: The start/goal found by ``benchmarks/maklink.py --search`` on ``seed003-listed`` (1 m grid):
+#: The start/goal fitted by ``benchmarks/maklink.py --search`` on ``seed003-listed`` (1 m grid):
 #: Dijkstra 507.53, improved 472.41, PSO = optimum 438.99 (all within 0.04 % of the paper).
 PAPER_PAIR: tuple[tuple[float, float], tuple[float, float]] = ((349.0, 13.0), (37.0, 296.0))
 

@@ -351,8 +351,9 @@ class PolygonWorld:
     def builtin(cls, name: str) -> PolygonWorld:
         """A built-in world: ``"seed003"`` is the 350 x 350 benchmark of seed paper 003
         (its six obstacles taken as convex hulls); ``"seed003-listed"`` takes the first
-        obstacle in its listed (self-crossing) vertex order, the reading on which the
-        paper's Table 1 is reproduced (``benchmarks/maklink.py --search``)."""
+        obstacle in its listed (self-crossing) vertex order, the reading to which a start
+        and goal were fitted that give the paper's Table 1 (``benchmarks/maklink.py
+        --search``)."""
         try:
             return _BUILTINS[name]()
         except KeyError:

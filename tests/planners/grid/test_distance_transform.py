@@ -1,5 +1,6 @@
 """Distance transforms (chamfer 3/4 with and without corner cutting, octile)
-and the any-angle MDT (exact and level fill) against independent oracles:
+and the any-angle MDT (exact and level fill, each under both corner rules) against
+independent oracles:
 raster-sweep Jarvis, scipy Dijkstra, brute-force line-of-sight Dijkstra, the
 thesis' level fill in plain Python."""
 
@@ -19,7 +20,9 @@ from tests.planners.grid.test_grid_oracles import (
     anyangle_oracle,
     chamfer_oracle,
     levels_oracle,
+    los,
     los_free,
+    los_free_thesis,
     octile_oracle,
     path_free,
     path_violations,
@@ -30,8 +33,11 @@ PLANS = {  # name -> (plan function, params, metric, corner cutting, fill)
     "dt-nocut": (dt.plan_dt, dt.DTParams("chamfer34", corner_cutting=False), "chamfer34", False,
                  "exact"),
     "dt-octile": (dt.plan_octile, None, "octile", False, "exact"),
-    "mdt": (dt.plan_mdt, None, "anyangle", None, "exact"),
-    "mdt-levels": (dt.plan_mdt, dt.MDTParams("levels"), "anyangle", None, "levels"),
+    "mdt": (dt.plan_mdt, None, "anyangle", True, "exact"),
+    "mdt-nocut": (dt.plan_mdt, dt.MDTParams(corner_cutting=False), "anyangle", False, "exact"),
+    "mdt-levels": (dt.plan_mdt, dt.MDTParams("levels"), "anyangle", True, "levels"),
+    "mdt-levels-nocut": (dt.plan_mdt, dt.MDTParams("levels", corner_cutting=False), "anyangle",
+                         False, "levels"),
 }
 
 
@@ -65,16 +71,24 @@ def test_fields_equal_oracles(case):
                   chamfer_oracle(occ, goal))
     assert _close(dt.distance_field(world, goal, "chamfer34"),
                   chamfer_oracle(occ, goal, corner_cutting=True))
-    mdt = dt.distance_field(world, goal, "anyangle")
-    assert _close(mdt, anyangle_oracle(occ, goal))
-    levels = dt.distance_field(world, goal, "anyangle", fill="levels")
-    assert _close(levels, levels_oracle(occ, goal))
-    # the exact MDT is never longer than the level fill or the non-cutting transforms
-    octile = dt.distance_field(world, goal, "octile")
-    reach = np.isfinite(octile)
-    assert np.array_equal(np.isfinite(levels), np.isfinite(mdt))
-    assert np.all(mdt[reach] <= octile[reach] + 1e-9)
-    assert np.all(mdt[np.isfinite(mdt)] <= levels[np.isfinite(mdt)] + 1e-9)
+    fields = {}
+    for cut in (True, False):
+        mdt = dt.distance_field(world, goal, "anyangle", corner_cutting=cut)
+        assert _close(mdt, anyangle_oracle(occ, goal, corner_cutting=cut)), cut
+        levels = dt.distance_field(world, goal, "anyangle", fill="levels", corner_cutting=cut)
+        assert _close(levels, levels_oracle(occ, goal, corner_cutting=cut)), cut
+        # the exact MDT is never longer than the level fill or the 8-connected transform
+        # (octile: true step lengths) of the same corner rule
+        octile = dt.distance_field(world, goal, "octile", corner_cutting=cut)
+        reach = np.isfinite(octile)
+        assert np.array_equal(np.isfinite(levels), np.isfinite(mdt))
+        assert np.array_equal(np.isfinite(mdt), reach)
+        assert np.all(mdt[reach] <= octile[reach] + 1e-9)
+        assert np.all(mdt[reach] <= levels[reach] + 1e-9)
+        fields[cut] = mdt
+    # the thesis' rule allows more moves: never longer than the closed-square rule
+    both = np.isfinite(fields[False])
+    assert np.all(fields[True][both] <= fields[False][both] + 1e-9)
 
 
 @settings(max_examples=40, deadline=None)
@@ -106,7 +120,7 @@ def test_paths_realise_field_values(case):
             free = np.argwhere(~occ)
             for a, b in zip(res.path[:-1], res.path[1:], strict=True):
                 seen = [field[y, x] for y, x in free
-                        if (x, y) != tuple(a) and los_free(occ, a, (x, y))]
+                        if (x, y) != tuple(a) and los(occ, a, (x, y), cut)]
                 assert field[int(b[1]), int(b[0])] == min(seen) < field[int(a[1]), int(a[0])]
 
 
@@ -120,18 +134,73 @@ def test_segment_hits_matches_liang_barsky(case, data):
     blocked = occ.view(np.uint8)
     free = K.segment_hits(blocked, x0, y0, x1, y1, True) == 0
     assert free == los_free(occ, (x0, y0), (x1, y1))
+    assert K.segment_clear(blocked, x0, y0, x1, y1, False) == free
+    thesis = los_free_thesis(occ, (x0, y0), (x1, y1))
+    assert K.segment_clear(blocked, x0, y0, x1, y1, True) == thesis
+    assert thesis == (path_violations(occ, [(x0, y0), (x1, y1)]) == [])  # two oracles agree
+    assert thesis or not free  # the closed-square rule is the stricter
 
 
-def test_thesis_maps_mdt_exact_and_not_longer_than_dt():
+def test_segment_clear_against_the_oracle_on_every_pair_of_free_cells():
+    """Every pair of free cells of random grids (where corner gaps and corner touches are
+    common), both rules, against the oracles."""
+    rng = np.random.default_rng(7)
+    touches = 0
+    for _ in range(12):
+        occ = rng.random((6, 7)) < 0.3
+        blocked = occ.view(np.uint8)
+        free = [(int(x), int(y)) for y, x in np.argwhere(~occ)]
+        for i, a in enumerate(free):
+            for b in free[i + 1:]:
+                thesis = K.segment_clear(blocked, *a, *b, True)
+                assert thesis == los_free_thesis(occ, a, b), (occ.astype(int), a, b)
+                closed = K.segment_clear(blocked, *a, *b, False)
+                assert closed == los_free(occ, a, b), (occ.astype(int), a, b)
+                touches += thesis and not closed
+    assert touches > 50  # many segments pass a blocked corner (the rules differ there)
+
+
+def test_segment_clear_corner_cases():
+    one = np.array([[0, 1], [0, 0]], dtype=np.uint8)  # ".@" over "..": (1, 0) blocked
+    gap = np.array([[0, 1], [1, 0]], dtype=np.uint8)  # ".@" over "@."
+    assert K.segment_clear(one, 0, 0, 1, 1, True)  # touches (1, 0) at its corner only
+    assert not K.segment_clear(one, 0, 0, 1, 1, False)
+    assert not K.segment_clear(gap, 0, 0, 1, 1, True)  # between two blocked cells
+    wide = np.zeros((3, 5), dtype=np.uint8)
+    wide[1, 2] = 1  # the centre cell
+    assert not K.segment_clear(wide, 0, 0, 4, 2, True)  # through its open square
+    assert K.segment_clear(wide, 0, 2, 2, 0, True)  # x + y = 2 touches its corner (1.5, 0.5)
+    assert not K.segment_clear(wide, 0, 2, 2, 0, False)
+    assert K.segment_clear(wide, 2, 0, 0, 2, True)  # either direction
+    wide[0, 1] = 1  # (1, 0) now touches the centre cell diagonally at (1.5, 0.5)
+    assert not K.segment_clear(wide, 0, 2, 2, 0, True)
+    assert not K.segment_clear(wide, 2, 0, 0, 2, True)
+
+
+@pytest.mark.parametrize("cut", [True, False])
+def test_thesis_maps_mdt_exact_and_not_longer_than_dt(cut):
+    """Under one corner rule the MDT path is never longer than the DT's (3:4 and octile),
+    on every thesis map and from every free start; both find a path or neither does."""
+    compared = 0
     for name in THESIS_MAPS:
         case = thesis_case(name)
         occ = case.world.occupancy
-        mdt = dt.distance_field(case.world, case.goal, "anyangle")
-        assert _close(mdt, anyangle_oracle(occ, case.goal)), name
-        r_mdt = dt.plan_mdt(case.world, case.start, case.goal)
-        for params in (dt.DTParams("chamfer34", corner_cutting=False), dt.DTParams("octile")):
-            r_dt = dt.plan(case.world, case.start, case.goal, params=params)
-            assert r_mdt.length <= r_dt.length + 1e-9, (name, params)
+        mdt = dt.distance_field(case.world, case.goal, "anyangle", corner_cutting=cut)
+        assert _close(mdt, anyangle_oracle(occ, case.goal, corner_cutting=cut)), name
+        free = np.argwhere(~occ)
+        starts = [case.start] + [(int(x), int(y)) for y, x in free[::5]]
+        for start in starts:
+            r_mdt = dt.plan_mdt(case.world, start, case.goal,
+                                params=dt.MDTParams(corner_cutting=cut))
+            for params in (dt.DTParams("chamfer34", corner_cutting=cut),
+                           dt.DTParams("octile", corner_cutting=cut)):
+                r_dt = dt.plan(case.world, start, case.goal, params=params)
+                assert r_mdt.info["corner_cutting"] == r_dt.info["corner_cutting"] == cut
+                assert r_mdt.success == r_dt.success, (name, start, params)
+                if r_dt.success:
+                    assert r_mdt.length <= r_dt.length + 1e-9, (name, start, params)
+                    compared += 1
+    assert compared > 100
 
 
 def test_field_reused_for_many_starts_and_stop_at():
@@ -174,13 +243,21 @@ def test_corner_cutting_default_and_option():
     assert nocut.path.tolist() == [[0, 0], [0, 1], [1, 1]]
     assert dt.plan_octile(one, (0, 0), (1, 1)).path.shape == (3, 2)
     assert dt.DTParams("octile", corner_cutting=True).cuts_corners
+    # the MDT takes the DT's (thesis') rule by default
+    mdt = dt.plan_mdt(one, (0, 0), (1, 1))
+    assert mdt.path.shape == (2, 2) and mdt.info["corner_cutting"] is True
+    mdt_nocut = dt.plan_mdt(one, (0, 0), (1, 1), params=dt.MDTParams(corner_cutting=False))
+    assert mdt_nocut.path.tolist() == [[0, 0], [0, 1], [1, 1]]
+    assert mdt_nocut.info["corner_cutting"] is False
 
 
-def test_level_fill_on_the_cluttered_map():
+@pytest.mark.parametrize("cut", [True, False])
+def test_level_fill_on_the_cluttered_map(cut):
     case = thesis_case("cluttered")
-    exact = dt.distance_field(case.world, case.goal, "anyangle")
-    levels = dt.distance_field(case.world, case.goal, "anyangle", fill="levels")
-    assert _close(levels, levels_oracle(case.world.occupancy, case.goal))
+    exact = dt.distance_field(case.world, case.goal, "anyangle", corner_cutting=cut)
+    levels = dt.distance_field(case.world, case.goal, "anyangle", fill="levels",
+                               corner_cutting=cut)
+    assert _close(levels, levels_oracle(case.world.occupancy, case.goal, corner_cutting=cut))
     assert np.all(exact[np.isfinite(exact)] <= levels[np.isfinite(exact)] + 1e-9)
 
 
@@ -202,6 +279,10 @@ def test_bad_inputs():
         dt.DTParams(corner_cutting=1)
     with pytest.raises(ParameterError, match="fill"):
         dt.MDTParams("bfs")
+    with pytest.raises(ParameterError, match="corner_cutting"):
+        dt.MDTParams(corner_cutting=None)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match="corner_cutting"):
+        dt.distance_field(world, (0, 0), "anyangle", corner_cutting=1)
     with pytest.raises(ParameterError, match="metric"):
         dt.distance_field(world, (0, 0), "manhattan")
     with pytest.raises(UnreachableError, match="goal"):

@@ -23,7 +23,9 @@ from tests.planners.grid.test_grid_oracles import path_free, path_violations
 @pytest.mark.parametrize("name", THESIS_MAPS)
 def test_success_in_19_of_20_seeds_within_5_percent_of_mdt(name):
     case = thesis_case(name)
-    best = dt.plan_mdt(case.world, case.start, case.goal).length
+    # the GA's moves touch no blocked square: compare with the MDT of that rule
+    best = dt.plan_mdt(case.world, case.start, case.goal,
+                       params=dt.MDTParams(corner_cutting=False)).length
     good = 0
     seeds = size(20, 4)  # kernels as Python (coverage): the same lines from fewer seeds
     for seed in range(seeds):
@@ -32,7 +34,7 @@ def test_success_in_19_of_20_seeds_within_5_percent_of_mdt(name):
             # never through an obstacle, by an independent test
             assert path_free(case.world.occupancy, res.path)
             assert tuple(res.path[0]) == case.start and tuple(res.path[-1]) == case.goal
-            assert res.length >= best - 1e-9  # the MDT is the any-angle optimum
+            assert res.length >= best - 1e-9  # the MDT is the any-angle optimum of the rule
             good += res.length <= 1.05 * best
     assert good >= seeds - 1, f"{name}: {good}/{seeds}"
 

@@ -61,6 +61,49 @@ def los_free(occ: np.ndarray, a, b) -> bool:
     return not np.any(inside & (t0 <= t1))
 
 
+def los_free_thesis(occ: np.ndarray, a, b) -> bool:
+    """The thesis' rule (corner cutting) between cell centres a=(x, y), b: the segment
+    meets no blocked cell's *open* square (Liang-Barsky with strict inequalities; cells
+    outside the grid are blocked) and passes through no corner point shared by two
+    blocked cells that touch diagonally (exact integer test on doubled coordinates)."""
+    h, w = occ.shape
+    pad = np.ones((h + 2, w + 2), dtype=bool)
+    pad[1:-1, 1:-1] = occ
+    ys, xs = np.nonzero(pad)
+    xs, ys = xs - 1, ys - 1
+    p0 = np.asarray(a, dtype=float)
+    d = np.asarray(b, dtype=float) - p0
+    t0 = np.zeros(xs.size)
+    t1 = np.ones(xs.size)
+    inside = np.ones(xs.size, dtype=bool)
+    for axis, c in ((0, xs), (1, ys)):
+        lo, hi = c - 0.5, c + 0.5
+        if d[axis] == 0:
+            inside &= (p0[axis] > lo) & (p0[axis] < hi)
+            continue
+        ta = (lo - p0[axis]) / d[axis]
+        tb = (hi - p0[axis]) / d[axis]
+        t0 = np.maximum(t0, np.minimum(ta, tb))
+        t1 = np.minimum(t1, np.maximum(ta, tb))
+    if np.any(inside & (t0 < t1)):
+        return False
+    # corner points (x + 1/2, y + 1/2), doubled, where two blocked cells touch diagonally
+    corners = [(2 * x + 1, 2 * y + 1) for y in range(-1, h) for x in range(-1, w)
+               if (pad[y + 1, x + 1] and pad[y + 2, x + 2])
+               or (pad[y + 1, x + 2] and pad[y + 2, x + 1])]
+    ax, ay, bx, by = (2 * int(v) for v in (*a, *b))
+    for cx, cy in corners:
+        on_line = (bx - ax) * (cy - ay) == (by - ay) * (cx - ax)
+        if on_line and min(ax, bx) <= cx <= max(ax, bx) and min(ay, by) <= cy <= max(ay, by):
+            return False
+    return True
+
+
+def los(occ: np.ndarray, a, b, corner_cutting: bool = False) -> bool:
+    """:func:`los_free_thesis` with ``corner_cutting``, else :func:`los_free`."""
+    return los_free_thesis(occ, a, b) if corner_cutting else los_free(occ, a, b)
+
+
 def path_free(occ: np.ndarray, path) -> bool:
     pts = [tuple(map(float, p)) for p in path]
     return all(los_free(occ, pts[i], pts[i + 1]) for i in range(len(pts) - 1))
@@ -128,8 +171,9 @@ def chamfer_oracle(occ: np.ndarray, goal, corner_cutting: bool = False) -> np.nd
     return out
 
 
-def anyangle_oracle(occ: np.ndarray, goal) -> np.ndarray:
-    """Dijkstra on the graph of every line-of-sight pair of free cell centres."""
+def anyangle_oracle(occ: np.ndarray, goal, corner_cutting: bool = False) -> np.ndarray:
+    """Dijkstra on the graph of every line-of-sight pair of free cell centres
+    (``corner_cutting``: the thesis' rule, :func:`los_free_thesis`)."""
     h, w = occ.shape
     free = [(x, y) for y in range(h) for x in range(w) if not occ[y, x]]
     idx = {c: i for i, c in enumerate(free)}
@@ -137,7 +181,7 @@ def anyangle_oracle(occ: np.ndarray, goal) -> np.ndarray:
     for i, a in enumerate(free):
         for j in range(i + 1, len(free)):
             b = free[j]
-            if los_free(occ, a, b):
+            if los(occ, a, b, corner_cutting):
                 length = math.hypot(a[0] - b[0], a[1] - b[1])
                 rows += [i, j]
                 cols += [j, i]
@@ -150,7 +194,7 @@ def anyangle_oracle(occ: np.ndarray, goal) -> np.ndarray:
     return out
 
 
-def levels_oracle(occ: np.ndarray, goal) -> np.ndarray:
+def levels_oracle(occ: np.ndarray, goal, corner_cutting: bool = False) -> np.ndarray:
     """The thesis' MDT fill as printed (section 2.2.4), in plain Python: level 1
     = cells that see the goal, level k + 1 = empty cells that see a level-k cell,
     value = the least (level-k value + segment length); filled cells stay."""
@@ -164,7 +208,7 @@ def levels_oracle(occ: np.ndarray, goal) -> np.ndarray:
             if c in value:
                 continue
             cands = [value[f] + math.hypot(c[0] - f[0], c[1] - f[1])
-                     for f in frontier if los_free(occ, f, c)]
+                     for f in frontier if los(occ, f, c, corner_cutting)]
             if cands:
                 new[c] = min(cands)
         value.update(new)
