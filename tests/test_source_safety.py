@@ -24,7 +24,7 @@ UNSAFE_ATTRIBUTES = {("os", "system"), ("os", "popen"), ("builtins", "eval"),
                      ("yaml", "load"), ("yaml", "unsafe_load"), ("yaml", "full_load")}
 
 ALLOWED = {
-    # A SequencingProblem/MatrixProblem handed to solve_many() in memory travels to the worker
+    # A PlanarProblem/MatrixProblem handed to solve_many() in memory travels to the worker
     # processes as bytes made by _pickle_problem() from that object; no file, argument or
     # network input is ever unpickled (checked by test_the_pickle_exception_is_only_our_bytes).
     ("batch/jobs.py", "import pickle"),
