@@ -20,7 +20,7 @@ from subtask_opt.arm.report import tour_report
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.base.stop import StoppingCriterion
 from subtask_opt.tour.clustered import ConfiguredData
-from subtask_opt.tour.constraints import TourConstraints
+from subtask_opt.tour.constraints import TourConstraints, checked
 from subtask_opt.tour.problem import ClusteredProblem, MatrixProblem, _validated_order
 from subtask_opt.tour.solve import Result, SolverParams
 from subtask_opt.tour.solve import solve as solve_tour
@@ -210,17 +210,10 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
         return solve_tour(problem, seed=seed, stop=stop, params=params, progress=progress,
                           certify=certify, certify_time_limit=certify_time_limit,
                           constraints=constraints)
-    if constraints is None:
-        constraints = TourConstraints()
-    elif not isinstance(constraints, TourConstraints):
-        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
-                             f"{constraints!r}")
+    constraints = checked(constraints, problem.first)
     constraints.check_size(problem.size, matrix_home=False)
     shaped, searched = constraints, problem
     if constraints.home is not None:
-        if problem.first is not None:
-            raise ParameterError(f"the problem's first={problem.first} and a home contradict "
-                                 "each other (with a home the tour starts at the home)")
         searched = _with_home(problem, constraints.home)  # type: ignore[arg-type]
         shaped = replace(constraints, home=searched.size - 1)
     result = solve_tour(searched.tour_problem, seed=seed, stop=stop, params=params,

@@ -285,10 +285,10 @@ class ArmProblem:
                 raise ParameterError(f"a planar arm's home is a point (x, y) in metres, got "
                                      f"{self.home!r}")
         return PlanarProblem(self.targets, self.robot.model, time_model=self.time_model,
-                                 first=self.first, k=self.k, elbow=self.elbow,
-                                 configurations=self.configurations,
-                                 line_fallback=self.line_fallback,
-                                 check_all_legs=self.check_all_legs)
+                             first=self.first, k=self.k, elbow=self.elbow,
+                             configurations=self.configurations,
+                             line_fallback=self.line_fallback,
+                             check_all_legs=self.check_all_legs)
 
     def _serial(self) -> Any:
         from subtask_opt.arm.poses import PoseTargets

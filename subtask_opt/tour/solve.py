@@ -50,6 +50,7 @@ from subtask_opt.tour.constraints import (
     Canonical,
     TourConstraints,
     canonical,
+    checked,
     symmetric_path_matrix,
     transform_tensor,
 )
@@ -509,19 +510,12 @@ def _shaped(problem: TourProblem, constraints: TourConstraints | None,
             ) -> tuple[TourConstraints, TourProblem, Canonical]:
     """The validated constraints, the problem and its canonical form
     (:func:`subtask_opt.tour.constraints.canonical`)."""
-    if constraints is None:
-        constraints = TourConstraints()
-    elif not isinstance(constraints, TourConstraints):
-        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
-                             f"{constraints!r}")
-    constraints.check_size(problem.size, matrix_home=True)
     first = problem.first
+    constraints = checked(constraints, first)
+    constraints.check_size(problem.size, matrix_home=True)
     if first is not None and constraints.start is not None and first != constraints.start:
         raise ParameterError(f"the problem's first={first} and the constraints' "
                              f"start={constraints.start} contradict each other")
-    if first is not None and constraints.home is not None:
-        raise ParameterError(f"the problem's first={first} and a home contradict each other "
-                             "(with a home the tour starts at the home)")
     canon = canonical(problem.matrix, constraints, default_start=first or 0)
     return constraints, problem, canon
 
