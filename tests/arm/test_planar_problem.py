@@ -217,7 +217,7 @@ def test_chosen_configurations_are_certified_against_brute_force(robot, seed):
     assert result.certified == "optimal (proven)"
     # a poor incumbent (the index order, first reachable configurations) changes nothing
     first = np.argmax(np.isfinite(problem.timing.branch_joints).all(axis=2), axis=1)
-    proven = proven_configured_optimum(problem, np.arange(7), first, 60.0)
+    proven = proven_configured_optimum(problem.tour_problem, np.arange(7), first, 60.0)
     assert proven == pytest.approx(optimum, rel=1e-12)
 
 
