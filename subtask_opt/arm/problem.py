@@ -192,7 +192,7 @@ def _planar_file(path: Path) -> bool:
     if path.suffix.lower() == ".json":
         try:
             doc = json.loads(text)
-        except ValueError:
+        except (ValueError, RecursionError):
             return True  # the planar reader reports the error with its line
         rows = doc.get("subtasks", doc.get("targets")) if isinstance(doc, dict) else doc
         first = rows[0] if isinstance(rows, list) and rows else None

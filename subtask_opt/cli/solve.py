@@ -161,15 +161,18 @@ def run(args: argparse.Namespace) -> int:
     started = time.monotonic()
     refuse_overwriting_inputs([args.case, args.robot, args.precedence, args.scene, args.limits],
                               [args.json, args.plot, args.trajectory, args.animate, args.view])
-    robot = load_robot(args.robot, tool_frame=args.tool_frame, limits=_limits(args.limits))
+    robot = load_robot(args.robot)
     kind = PLANAR if robot.planar else SERIAL
     for dest, only in ONLY.items():
         if only != kind and _given(args, dest):
             raise ParameterError(f"{_option(dest)} applies to {only} arms only; {robot.name} "
                                  f"is {'a planar' if robot.planar else 'a serial'} arm")
+    if args.tool_frame is not None or args.limits is not None:
+        robot = load_robot(args.robot, tool_frame=args.tool_frame, limits=_limits(args.limits))
     if not robot.planar and args.time_model != "joint":
-        raise ParameterError(f"--time-model {args.time_model}: the Cartesian models are for "
-                             f"planar arms; {robot.name} uses the joint model")
+        raise ParameterError(f"--time-model {args.time_model}: serial arms use the joint model "
+                             f"only (the Cartesian models are for planar arms; {robot.name} "
+                             "is a serial arm)")
     if _given(args, "case_seed") and args.case != "random30":
         raise ParameterError(f"--case-seed applies to --case random30 only, not {args.case}")
     if any(_given(args, d) for d in ("vmax", "amax", "jmax", "speed_scale", "accel_scale")):
@@ -324,8 +327,8 @@ def _constraints(args: argparse.Namespace, planar: bool) -> Any:
         wanted = [flag for flag, value in (("--plot", args.plot), ("--trajectory",
                   args.trajectory), ("--animate", args.animate)) if value]
         if wanted:
-            raise ParameterError(f"{', '.join(wanted)} draw a planar arm's closed tours over "
-                                 "the subtasks; not available with --tour open or --home yet")
+            raise ParameterError(f"{', '.join(wanted)} draw closed tours over the subtasks "
+                                 "(planar arms); not available with --tour open or --home yet")
     return constraints
 
 

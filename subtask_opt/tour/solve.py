@@ -164,7 +164,7 @@ class SolverParams:
         """Stopping criteria used when :func:`solve` is given none, for ``size`` nodes;
         ``configured``: the search also chooses each subtask's configuration (a
         generalised TSP), whose local optima are deeper: below
-        :data:`~subtask_opt.ga.permutation.KICKS_FROM` nodes (from there on every child
+        :data:`~subtask_opt.tour.permutation.KICKS_FROM` nodes (from there on every child
         carries N/10 kicks) it makes :data:`CONFIGURED_RUNS` runs of two thirds of the
         stall each (:meth:`default_runs`)."""
         if self.preset == "paper":
@@ -188,7 +188,7 @@ class SolverParams:
         """Independent runs :func:`solve` makes (``runs``, or for ``size`` nodes,
         ``configured`` as in :meth:`default_stop`).
 
-        Choosing configurations below :data:`~subtask_opt.ga.permutation.KICKS_FROM`
+        Choosing configurations below :data:`~subtask_opt.tour.permutation.KICKS_FROM`
         nodes, a run falls into one of two or three deep local optima and stays
         there however long it stalls: :data:`CONFIGURED_RUNS` runs. Otherwise one.
         """
