@@ -38,7 +38,7 @@ def run(sizes: list[int], sets: list[int], seeds: int, stall_factor: float) -> l
         for n in sizes:
             for set_seed in sets:
                 problem = PlanarProblem(random_subtasks(arm, n, seed=set_seed), arm,
-                                            time_model="joint")
+                                        time_model="joint")
                 solve(problem, seed=0, stop=MaxGenerations(2))  # JIT warm-up
                 stall = SolverParams().default_stop(n, configured=True)[0]
                 assert isinstance(stall, NoImprovement)

@@ -60,7 +60,7 @@ def run_instance(robot: str, case: str, instance: int, seed: int, arm) -> list[d
     for model in MODELS:
         configurations = "optimize" if model in ("line", "joint") else "fixed"
         problem = PlanarProblem(subtasks, arm, time_model=model,
-                                    configurations=configurations)
+                                configurations=configurations)
         result = solve(problem, seed=seed)
         trajectory = tour_trajectory(problem, result)
         report = validate_trajectory(trajectory, dt=2e-3)

@@ -99,7 +99,8 @@ def certify(problem: PlanarProblem, time_limit: float, order: np.ndarray) -> flo
         return milp_optimum(problem.matrix)[0]
     _, configurations = problem.decode(order)
     try:
-        return proven_configured_optimum(problem, order, configurations, time_limit)
+        return proven_configured_optimum(problem.tour_problem, order, configurations,
+                                         time_limit)
     except SubtaskOptError as exc:
         if "not proven" not in str(exc):
             raise

@@ -174,7 +174,7 @@ def test_killed_worker_jobs_are_rerun_and_the_batch_completes(arm, client):
     import psutil
 
     problems = [PlanarProblem(random_subtasks(arm, 16, seed=500 + i), arm,
-                                  time_model="trapezoid") for i in range(N_JOBS)]
+                              time_model="trapezoid") for i in range(N_JOBS)]
     seeds = list(range(N_JOBS))
     stop = [NoImprovement(30), MaxGenerations(2000)]
     want = [solve(p, seed=s, stop=stop) for p, s in zip(problems, seeds, strict=True)]

@@ -17,10 +17,10 @@ import numpy as np
 
 from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm.report import tour_report
-from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
 from subtask_opt.base.stop import StoppingCriterion
 from subtask_opt.tour.clustered import ConfiguredData
-from subtask_opt.tour.constraints import TourConstraints
+from subtask_opt.tour.constraints import TourConstraints, checked
 from subtask_opt.tour.problem import ClusteredProblem, MatrixProblem, _validated_order
 from subtask_opt.tour.solve import Result, SolverParams
 from subtask_opt.tour.solve import solve as solve_tour
@@ -87,7 +87,6 @@ class PlanarProblem:
     line_fallback: str = "joint"
     check_all_legs: bool = False
     timing: TimingResult = field(init=False, compare=False, repr=False)
-    _matrix: np.ndarray = field(init=False, compare=False, repr=False)
     _tour: MatrixProblem | ClusteredProblem = field(init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -129,7 +128,6 @@ class PlanarProblem:
         # Legs the line model excludes are the only infinite times allowed.
         excluded = self.line_fallback == "exclude" and self.time_model == "line"
         fixed = MatrixProblem(timing.matrix, first=self.first, allow_impossible=excluded)
-        object.__setattr__(self, "_matrix", fixed.matrix)
         tour: MatrixProblem | ClusteredProblem = fixed
         if mode == "optimize":
             assert timing.branch_times is not None and timing.branch_joints is not None
@@ -141,16 +139,16 @@ class PlanarProblem:
     @property
     def matrix(self) -> np.ndarray:
         """The N x N travel times at the fixed configurations (read-only)."""
-        return self._matrix
+        return self._tour.matrix
 
     @property
     def size(self) -> int:
-        return int(self._matrix.shape[0])
+        return self._tour.size
 
     @property
     def symmetric(self) -> bool:
         """Whether the travel times are the same both ways (all built-in models)."""
-        return bool(np.allclose(self._matrix, self._matrix.T, rtol=1e-12, atol=0.0))
+        return self._tour.symmetric
 
     @property
     def optimizes_configurations(self) -> bool:
@@ -184,7 +182,7 @@ class PlanarProblem:
         """
         order = _validated_order(order, self.size)
         if not self.optimizes_configurations:
-            return (float(np.sum(self._matrix[order, np.roll(order, -1)])),
+            return (float(np.sum(self.matrix[order, np.roll(order, -1)])),
                     np.asarray(self.timing.configurations))
         from subtask_opt.tour.configurations import best_configurations
 
@@ -210,22 +208,19 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
         return solve_tour(problem, seed=seed, stop=stop, params=params, progress=progress,
                           certify=certify, certify_time_limit=certify_time_limit,
                           constraints=constraints)
-    if constraints is None:
-        constraints = TourConstraints()
-    elif not isinstance(constraints, TourConstraints):
-        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
-                             f"{constraints!r}")
+    constraints = checked(constraints, problem.first)
     constraints.check_size(problem.size, matrix_home=False)
     shaped, searched = constraints, problem
     if constraints.home is not None:
-        if problem.first is not None:
-            raise ParameterError(f"the problem's first={problem.first} and a home contradict "
-                                 "each other (with a home the tour starts at the home)")
         searched = _with_home(problem, constraints.home)  # type: ignore[arg-type]
         shaped = replace(constraints, home=searched.size - 1)
-    result = solve_tour(searched.tour_problem, seed=seed, stop=stop, params=params,
-                        progress=progress, certify=certify,
-                        certify_time_limit=certify_time_limit, constraints=shaped)
+    try:
+        result = solve_tour(searched.tour_problem, seed=seed, stop=stop, params=params,
+                            progress=progress, certify=certify,
+                            certify_time_limit=certify_time_limit, constraints=shaped)
+    except NoPathError as exc:  # only the line model excludes legs
+        raise NoPathError(f"{exc}: no tour avoids the excluded straight lines; use "
+                          "line_fallback='joint' to drive such legs as joint moves") from None
     configs = (result.configurations if result.configurations is not None
                else np.asarray(searched.timing.configurations))
     tour = (np.concatenate([[searched.size - 1], result.order]) if shaped.home is not None

@@ -192,7 +192,7 @@ def _planar_file(path: Path) -> bool:
     if path.suffix.lower() == ".json":
         try:
             doc = json.loads(text)
-        except ValueError:
+        except (ValueError, RecursionError):
             return True  # the planar reader reports the error with its line
         rows = doc.get("subtasks", doc.get("targets")) if isinstance(doc, dict) else doc
         first = rows[0] if isinstance(rows, list) and rows else None
@@ -275,30 +275,29 @@ class ArmProblem:
         from subtask_opt.arm.planar_problem import PlanarProblem
         from subtask_opt.arm.tasks import SubtaskSet
 
-        if not isinstance(self.targets, SubtaskSet):
-            raise ParameterError(f"{self.robot.name} is a planar arm: its targets are planar "
-                                 f"points (load_targets of an x,y file), got "
-                                 f"{type(self.targets).__name__}")
+        _check_targets(self.targets, SubtaskSet, self.robot, "planar points (load_targets "
+                       "of an x,y file)")
         if self.home is not None:
-            home = np.asarray(self.home, dtype=float)
+            try:
+                home = np.asarray(self.home, dtype=float)
+            except (TypeError, ValueError):
+                home = np.zeros(0)
             if home.shape != (2,) or not np.all(np.isfinite(home)):
                 raise ParameterError(f"a planar arm's home is a point (x, y) in metres, got "
                                      f"{self.home!r}")
         return PlanarProblem(self.targets, self.robot.model, time_model=self.time_model,
-                                 first=self.first, k=self.k, elbow=self.elbow,
-                                 configurations=self.configurations,
-                                 line_fallback=self.line_fallback,
-                                 check_all_legs=self.check_all_legs)
+                             first=self.first, k=self.k, elbow=self.elbow,
+                             configurations=self.configurations,
+                             line_fallback=self.line_fallback,
+                             check_all_legs=self.check_all_legs)
 
     def _serial(self) -> Any:
         from subtask_opt.arm.poses import PoseTargets
         from subtask_opt.arm.scene import Scene
         from subtask_opt.arm.serial_problem import SerialProblem, default_home
 
-        if not isinstance(self.targets, PoseTargets):
-            raise ParameterError(f"{self.robot.name} is a serial arm: its targets are 3-D "
-                                 f"(load_targets of an x,y,z,... file), got "
-                                 f"{type(self.targets).__name__}")
+        _check_targets(self.targets, PoseTargets, self.robot, "3-D (load_targets of an "
+                       "x,y,z,... file)")
         if self.first is not None:
             raise ParameterError("ArmProblem.first applies to planar arms; a serial arm's "
                                  "tour starts at its home (TourConstraints(start=I) for the "
@@ -319,6 +318,13 @@ class ArmProblem:
     def size(self) -> int:
         """Number of targets."""
         return int(self.compiled.size)
+
+
+def _check_targets(targets: Any, kind: type, robot: Robot, what: str) -> None:
+    if not isinstance(targets, kind):
+        family = "a planar arm" if robot.planar else "a serial arm"
+        raise ParameterError(f"{robot.name} is {family}: its targets are {what}, got "
+                             f"{type(targets).__name__}")
 
 
 def solve(problem: ArmProblem | MatrixProblem | ClusteredProblem | Any, *, seed: int = 0,

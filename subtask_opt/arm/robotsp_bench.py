@@ -56,7 +56,7 @@ def _load(data_dir: Path) -> tuple[np.ndarray, dict[str, list[int]], dict[str, A
 def _peer(name: str) -> Callable[..., Any] | str:
     """The peer function, or why it is unavailable."""
     try:
-        from subtask_opt.arm import peers  # type: ignore[attr-defined]
+        from subtask_opt.tour import peers
     except ImportError as exc:
         return f"subtask_opt.tour.peers not available ({exc})"
     fn = getattr(peers, {"robotsp": "robotsp_method"}.get(name, name), None)

@@ -3,7 +3,8 @@
 A :class:`SerialProblem` is built once: every IK solution of every target
 (configurations in collision with the scene or the arm itself dropped), then
 the matrix of joint-space leg times between all configurations and the home
-configuration (the synchronised per-joint trapezoid,
+configuration (the joint model: every joint on the straight joint-space line, time-optimal
+under the velocity, acceleration and, where the arm has them, jerk limits,
 :func:`~subtask_opt.arm.timing.joint_legs.trapezoid_leg_times`).
 :func:`solve_serial_problem` searches the order and one configuration per target
 together (a generalised TSP on the shared micro-GA core, decoded exactly by a
@@ -21,7 +22,7 @@ once more knowing those legs and the shorter answer is kept
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal synchronised profiles with the arm's jerk limits for
-the chosen legs (equal to the trapezoid times when the arm has none).
+the chosen legs, equal to the planned times to round-off.
 """
 
 from __future__ import annotations
@@ -179,7 +180,8 @@ class SerialProblem:
         home.setflags(write=False)
         object.__setattr__(self, "home", home)
         acc = arm.limits.require("acceleration")
-        object.__setattr__(self, "limits", joint_limits(arm.limits.velocity, acc))
+        object.__setattr__(self, "limits", joint_limits(arm.limits.velocity, acc,
+                                                         arm.limits.jerk))
         cpu: dict[str, float] = {"ik": 0.0, "collision": 0.0, "matrix": 0.0, "compile": 0.0}
 
         checker = None
@@ -227,7 +229,7 @@ class SerialProblem:
             memory = trapezoid_square(flat, self.limits)
             legs = memory.view()
             home_out = trapezoid_leg_times(home, flat, self.limits)[0]
-            home_in = home_out.copy()  # the trapezoid time is the same either way
+            home_in = home_out.copy()  # a leg takes as long either way
             dist, cheapest, top = _gc.block_minima(memory, offsets)
         penalty = (len(configs) + 2) * max(float(top), float(home_out.max())) + 1.0
         for name, value in (("configurations", tuple(configs)), ("offsets", offsets),
@@ -269,7 +271,7 @@ class SerialReport:
         home: (n,) home configuration (radians).
         leg_times: (N + 1,) executed (ruckig) time of each leg: home -> order[0], ...,
             order[-1] -> home.
-        planned_leg_times: (N + 1,) the same legs' trapezoid times (the search's model).
+        planned_leg_times: (N + 1,) the same legs' planned times (the search's model).
         total_time: sum of ``leg_times`` (s).
         collision_checked: whether configurations and the tour's legs were checked.
         counts: targets, configurations per target, legs checked, legs infeasible,
@@ -314,7 +316,7 @@ class SerialReport:
         cpu = ", ".join(f"{k} {v:.3f} s" for k, v in self.cpu.items())
         return [
             f"{sum(per)} configurations ({min(per)}-{max(per)} per target); executed "
-            f"{self.total_time:.4f} s (ruckig), planned {self.planned_time:.4f} s (trapezoid)",
+            f"{self.total_time:.4f} s (ruckig), planned {self.planned_time:.4f} s",
             f"legs checked {c['legs_checked']}, infeasible {c['legs_infeasible']}, "
             f"detoured {c['legs_detoured']}" + ("" if self.collision_checked
                                                  else " (collisions not checked)"),
@@ -337,7 +339,7 @@ class SerialReport:
 
     @property
     def planned_time(self) -> float:
-        """Sum of the trapezoid times of the tour's legs (s)."""
+        """Sum of the planned times of the tour's legs (s)."""
         return float(self.planned_leg_times.sum())
 
     def tour_configurations(self) -> np.ndarray:
@@ -354,7 +356,7 @@ class SerialReport:
             f"({min(c['configurations_per_target'])}-{max(c['configurations_per_target'])} "
             f"per target), seed {self.seed}",
             f"total time {self.total_time:.4f} s executed (ruckig), "
-            f"{self.planned_time:.4f} s planned (trapezoid)",
+            f"{self.planned_time:.4f} s planned",
             f"legs checked {c['legs_checked']}, infeasible {c['legs_infeasible']}, "
             f"detoured {c['legs_detoured']}" + ("" if self.collision_checked
                                                  else " (collisions not checked)"),
@@ -423,7 +425,7 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
 
     Every answer carries a lower bound: the Held-Karp bound of the cheapest planned leg
     between every two targets (and home), which no tour's planned or executed time is
-    below (ruckig's jerk-limited legs are never faster than the planned trapezoid).
+    below (the planned legs are the executed ones to round-off).
     ``certify`` proves a closed tour without precedence optimal for the planned times by
     the generalised-TSP branch and cut over every configuration (small problems), or
     says why not.
@@ -484,13 +486,9 @@ def _serial_shape(problem: SerialProblem, constraints: TourConstraints | None) -
     """Validate ``constraints`` for a tour from the problem's home and put them in
     canonical form (a first or last target as precedence pairs, an open path's free
     return to the home)."""
-    from subtask_opt.tour.constraints import canonical
+    from subtask_opt.tour.constraints import canonical, checked
 
-    if constraints is None:
-        constraints = TourConstraints()
-    elif not isinstance(constraints, TourConstraints):
-        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
-                             f"{constraints!r}")
+    constraints = checked(constraints)
     if constraints.home is not None:
         raise ParameterError("a serial arm's tour starts at its home configuration: give it "
                              "as ArmProblem(home=...) (--home q1,...,qn), not as "
@@ -788,7 +786,7 @@ def _near(problem: SerialProblem, k: int) -> np.ndarray:
 def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray,
                open_path: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The chosen configurations (input order), the joint path home -> ... -> home (open:
-    no return), and each leg's planned (trapezoid) and executed (ruckig) time."""
+    no return), and each leg's planned and executed (ruckig) time."""
     n = problem.size
     chosen = np.array([problem.configurations[i][choice[i]] for i in range(n)])
     path = np.vstack([problem.home, chosen[order]] + ([] if open_path else [problem.home]))

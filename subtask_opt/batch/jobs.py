@@ -325,9 +325,9 @@ def _run_task(task: _Task, *, stop: Any, params: SolverParams | None) -> JobResu
             subtasks = (task.subtasks if task.subtasks is not None
                         else builtin_case(str(job.case), arm, seed=job.case_seed))
             problem = PlanarProblem(subtasks, arm, time_model=job.time_model,
-                                        first=job.first, k=job.k, elbow=job.elbow,
-                                        configurations=job.configuration_mode,
-                                        line_fallback=job.line_fallback)
+                                    first=job.first, k=job.k, elbow=job.elbow,
+                                    configurations=job.configuration_mode,
+                                    line_fallback=job.line_fallback)
             constraints = (None if job.home is None
                            else TourConstraints(home=(job.home[0], job.home[1])))
             result = solve(problem, seed=task.seed, stop=stop, params=params,
@@ -387,7 +387,7 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
                     PlanarProblem(subtasks, arm, time_model="trapezoid").matrix)
             else:
                 problem = PlanarProblem(subtasks, arm, time_model=time_model,
-                                            configurations=mode)
+                                        configurations=mode)
             solve(problem, seed=0, stop=MaxGenerations(3))
         except SubtaskOptError as exc:  # e.g. a mode the model refuses: its jobs will say so
             warnings.warn(f"warm-up of the {time_model} model ({mode}) skipped: {exc}",

@@ -12,7 +12,6 @@ from subtask_opt.cli._common import (
     add_no_progress,
     add_stop_options,
     add_workers,
-    float_in,
     json_output,
     plot_output,
     refuse_overwriting_inputs,
@@ -33,6 +32,7 @@ _SHOWN_FAILURES = 20
 def register(root: argparse._SubParsersAction) -> None:
     """Add the ``batch`` command."""
     from subtask_opt.arm.timing import TIME_MODELS
+    from subtask_opt.cli.solve import add_cell_options, signed_numbers
 
     p = root.add_parser(
         "batch",
@@ -47,22 +47,17 @@ def register(root: argparse._SubParsersAction) -> None:
                         '(.json: [{"id": ..., "case": FILE|square20|random30, "robot": ..., '
                         '"time_model": ..., "seed": ..., "case_seed": ...}, ...])')
     files = p.add_argument_group(
-        "the jobs of subtask and target files (a manifest gives each job its own)")
+        "the jobs of subtask and target files (a manifest gives each job its own; the cell "
+        "options are for serial arms)")
     files.add_argument("--robot", metavar="NAME|PATH.urdf",
                        help="robot of every file job (default planar_2r); a serial arm "
                             "(ur5, ...) takes target files x,y,z,dx,dy,dz or poses")
     files.add_argument("--time-model", choices=TIME_MODELS, metavar="MODEL",
                        help="time model of every planar file job (default joint)")
-    files.add_argument("--home", type=_numbers, metavar="X,Y|Q1,...,QN",
+    files.add_argument("--home", type=signed_numbers, metavar="X,Y|Q1,...,QN",
                        help="a planar arm's home point X,Y (m), or a serial arm's home "
                             "configuration in degrees (default: the robot file's)")
-    files.add_argument("--scene", metavar="SCENE.json", help="(serial arms) boxes to avoid")
-    files.add_argument("--standoff", type=float_in(-1.0, 1.0), metavar="M",
-                       help="(serial arms) tool standoff along its axis in metres (default 0)")
-    files.add_argument("--axis-step", type=float_in(0.0, 360.0, open_low=True),
-                       metavar="DEG", help="(serial arms) sampling step about a tool axis "
-                                           "(default 45)")
-    files.add_argument("--tool-frame", metavar="FRAME", help="(serial arms) the tool frame")
+    add_cell_options(files)
     add_workers(p, what="the jobs")
     p.add_argument("--seed", type=seed, default=None, metavar="N",
                    help="solver seed of every job (default: each manifest job's own seed, "
@@ -75,12 +70,6 @@ def register(root: argparse._SubParsersAction) -> None:
                    help="write a figure of every job's total time, failed jobs marked")
     add_no_progress(p)
     p.set_defaults(handler=run)
-
-
-def _numbers(text: str) -> tuple[float, ...]:
-    from subtask_opt.cli.solve import _signed_numbers
-
-    return _signed_numbers(text)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -84,7 +84,7 @@ def register(root: argparse._SubParsersAction) -> None:
     shape.add_argument("--end", type=non_negative_int, default=None, metavar="I",
                        help="(--tour open) the subtask the path ends at (default: free); a "
                             "serial arm's closed tour: the last target before home")
-    shape.add_argument("--home", type=_signed_numbers, default=None, metavar="X,Y|Q1,...,QN",
+    shape.add_argument("--home", type=signed_numbers, default=None, metavar="X,Y|Q1,...,QN",
                        help="visited first and last, not a subtask: a point X,Y (m) the planar "
                             "arm must reach, or for a serial arm its home configuration in "
                             "degrees (default there: the robot file's home, if any)")
@@ -161,15 +161,18 @@ def run(args: argparse.Namespace) -> int:
     started = time.monotonic()
     refuse_overwriting_inputs([args.case, args.robot, args.precedence, args.scene, args.limits],
                               [args.json, args.plot, args.trajectory, args.animate, args.view])
-    robot = load_robot(args.robot, tool_frame=args.tool_frame, limits=_limits(args.limits))
+    robot = load_robot(args.robot)
     kind = PLANAR if robot.planar else SERIAL
     for dest, only in ONLY.items():
         if only != kind and _given(args, dest):
             raise ParameterError(f"{_option(dest)} applies to {only} arms only; {robot.name} "
                                  f"is {'a planar' if robot.planar else 'a serial'} arm")
+    if args.tool_frame is not None or args.limits is not None:
+        robot = load_robot(args.robot, tool_frame=args.tool_frame, limits=_limits(args.limits))
     if not robot.planar and args.time_model != "joint":
-        raise ParameterError(f"--time-model {args.time_model}: the Cartesian models are for "
-                             f"planar arms; {robot.name} uses the joint model")
+        raise ParameterError(f"--time-model {args.time_model}: serial arms use the joint model "
+                             f"only (the Cartesian models are for planar arms; {robot.name} "
+                             "is a serial arm)")
     if _given(args, "case_seed") and args.case != "random30":
         raise ParameterError(f"--case-seed applies to --case random30 only, not {args.case}")
     if any(_given(args, d) for d in ("vmax", "amax", "jmax", "speed_scale", "accel_scale")):
@@ -324,8 +327,8 @@ def _constraints(args: argparse.Namespace, planar: bool) -> Any:
         wanted = [flag for flag, value in (("--plot", args.plot), ("--trajectory",
                   args.trajectory), ("--animate", args.animate)) if value]
         if wanted:
-            raise ParameterError(f"{', '.join(wanted)} draw a planar arm's closed tours over "
-                                 "the subtasks; not available with --tour open or --home yet")
+            raise ParameterError(f"{', '.join(wanted)} draw closed tours over the subtasks "
+                                 "(planar arms); not available with --tour open or --home yet")
     return constraints
 
 
@@ -405,6 +408,16 @@ def _add_serial_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group(
         "serial arms only (--robot ur3|ur5|ur10|panda|vs060_drill|PATH.urdf; --case is a CSV "
         "of x,y,z,dx,dy,dz or x,y,z,qx,qy,qz,qw rows)")
+    add_cell_options(g)
+    g.add_argument("--limits", metavar="NAME|FILE.json",
+                   help="a named limit set of the robot or a JSON file of per-joint limits")
+    g.add_argument("--view", metavar="OUT.html", type=html_output,
+                   help="write the executed tour as an offline 3-D HTML animation")
+
+
+def add_cell_options(g: Any) -> None:
+    """A serial arm's cell: ``--scene``, ``--standoff``, ``--axis-step``, ``--tool-frame``
+    (``solve`` and ``batch``)."""
     g.add_argument("--scene", metavar="SCENE.json", default=None,
                    help='boxes to avoid: {"boxes": [{"name", "center", "half_extents", '
                         '"rotation"}]}')
@@ -414,13 +427,9 @@ def _add_serial_options(p: argparse.ArgumentParser) -> None:
                    metavar="DEG", help="sampling step of the free rotation about a tool axis "
                                        "(default 45)")
     g.add_argument("--tool-frame", metavar="FRAME", help="tool frame (default: the robot's)")
-    g.add_argument("--limits", metavar="NAME|FILE.json",
-                   help="a named limit set of the robot or a JSON file of per-joint limits")
-    g.add_argument("--view", metavar="OUT.html", type=html_output,
-                   help="write the executed tour as an offline 3-D HTML animation")
 
 
-def _signed_numbers(text: str) -> tuple[float, ...]:
+def signed_numbers(text: str) -> tuple[float, ...]:
     """Comma-separated finite numbers in [-1e4, 1e4] (a point in m, or joint values in degrees)."""
     import math
 

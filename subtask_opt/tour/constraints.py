@@ -164,6 +164,20 @@ class TourConstraints:
         return {"tour": self.tour, "start": self.start, "end": self.end, "home": home}
 
 
+def checked(constraints: object, first: int | None = None) -> TourConstraints:
+    """``constraints`` validated (None: a plain closed tour), refusing a home together with
+    a problem's own first node ``first`` (with a home the tour starts at the home)."""
+    if constraints is None:
+        constraints = TourConstraints()
+    elif not isinstance(constraints, TourConstraints):
+        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
+                             f"{constraints!r}")
+    if first is not None and constraints.home is not None:
+        raise ParameterError(f"the problem's first={first} and a home contradict each other "
+                             "(with a home the tour starts at the home)")
+    return constraints
+
+
 def _home_value(home: object) -> tuple[float, float] | int:
     if isinstance(home, (int, np.integer)) and not isinstance(home, bool):
         return _index(home, "home")

@@ -19,8 +19,24 @@ from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.tour.clustered import ConfiguredData
 
 
+class _Sized:
+    """What every tour problem says of its (N, N) ``matrix``."""
+
+    matrix: np.ndarray
+
+    @property
+    def size(self) -> int:
+        """Number of nodes (clusters of a clustered problem)."""
+        return int(self.matrix.shape[0])
+
+    @property
+    def symmetric(self) -> bool:
+        """Whether the costs are the same both ways."""
+        return bool(np.allclose(self.matrix, self.matrix.T, rtol=1e-12, atol=0.0))
+
+
 @dataclass(frozen=True)
-class MatrixProblem:
+class MatrixProblem(_Sized):
     """A tour over a travel-time matrix of your own (N x N, finite, >= 0).
 
     Attributes:
@@ -45,15 +61,6 @@ class MatrixProblem:
         object.__setattr__(self, "matrix", m)
         _check_first(self.first, m.shape[0])
 
-    @property
-    def size(self) -> int:
-        return int(self.matrix.shape[0])
-
-    @property
-    def symmetric(self) -> bool:
-        """Whether the travel times are the same both ways."""
-        return bool(np.allclose(self.matrix, self.matrix.T, rtol=1e-12, atol=0.0))
-
     def tour_time(self, order: np.ndarray) -> float:
         """Total time of the closed tour visiting ``order`` (validated)."""
         order = _validated_order(order, self.size)
@@ -61,7 +68,7 @@ class MatrixProblem:
 
 
 @dataclass(frozen=True, eq=False)
-class ClusteredProblem:
+class ClusteredProblem(_Sized):
     """One node of every cluster visited: a generalised TSP over a cost tensor.
 
     Attributes:
@@ -111,16 +118,6 @@ class ClusteredProblem:
         object.__setattr__(self, "present", present)
         _check_first(self.first, n)
         object.__setattr__(self, "_data", pack_data(t)[0])
-
-    @property
-    def size(self) -> int:
-        """Number of clusters."""
-        return int(self.costs.shape[0])
-
-    @property
-    def symmetric(self) -> bool:
-        """Whether ``matrix`` is the same both ways."""
-        return bool(np.allclose(self.matrix, self.matrix.T, rtol=1e-12, atol=0.0))
 
     def configured_data(self) -> ConfiguredData:
         """The per-node costs the clustered GA decodes."""

@@ -50,6 +50,7 @@ from subtask_opt.tour.constraints import (
     Canonical,
     TourConstraints,
     canonical,
+    checked,
     symmetric_path_matrix,
     transform_tensor,
 )
@@ -163,7 +164,7 @@ class SolverParams:
         """Stopping criteria used when :func:`solve` is given none, for ``size`` nodes;
         ``configured``: the search also chooses each subtask's configuration (a
         generalised TSP), whose local optima are deeper: below
-        :data:`~subtask_opt.ga.permutation.KICKS_FROM` nodes (from there on every child
+        :data:`~subtask_opt.tour.permutation.KICKS_FROM` nodes (from there on every child
         carries N/10 kicks) it makes :data:`CONFIGURED_RUNS` runs of two thirds of the
         stall each (:meth:`default_runs`)."""
         if self.preset == "paper":
@@ -187,7 +188,7 @@ class SolverParams:
         """Independent runs :func:`solve` makes (``runs``, or for ``size`` nodes,
         ``configured`` as in :meth:`default_stop`).
 
-        Choosing configurations below :data:`~subtask_opt.ga.permutation.KICKS_FROM`
+        Choosing configurations below :data:`~subtask_opt.tour.permutation.KICKS_FROM`
         nodes, a run falls into one of two or three deep local optima and stays
         there however long it stalls: :data:`CONFIGURED_RUNS` runs. Otherwise one.
         """
@@ -509,19 +510,12 @@ def _shaped(problem: TourProblem, constraints: TourConstraints | None,
             ) -> tuple[TourConstraints, TourProblem, Canonical]:
     """The validated constraints, the problem and its canonical form
     (:func:`subtask_opt.tour.constraints.canonical`)."""
-    if constraints is None:
-        constraints = TourConstraints()
-    elif not isinstance(constraints, TourConstraints):
-        raise ParameterError(f"solve: constraints must be a TourConstraints, got "
-                             f"{constraints!r}")
-    constraints.check_size(problem.size, matrix_home=True)
     first = problem.first
+    constraints = checked(constraints, first)
+    constraints.check_size(problem.size, matrix_home=True)
     if first is not None and constraints.start is not None and first != constraints.start:
         raise ParameterError(f"the problem's first={first} and the constraints' "
                              f"start={constraints.start} contradict each other")
-    if first is not None and constraints.home is not None:
-        raise ParameterError(f"the problem's first={first} and a home contradict each other "
-                             "(with a home the tour starts at the home)")
     canon = canonical(problem.matrix, constraints, default_start=first or 0)
     return constraints, problem, canon
 

@@ -154,7 +154,7 @@ def test_line_through_the_inner_disc_is_reported_and_replaced_or_excluded() -> N
     # every closed tour of 3 subtasks uses the impossible line
     for configurations in ("fixed", "optimize"):
         problem = PlanarProblem(s, arm, time_model="line", line_fallback="exclude",
-                                    configurations=configurations)
+                                configurations=configurations)
         with pytest.raises(NoPathError, match="excluded straight lines"):
             solve(problem, seed=0)
     # the fallback drives it as a joint move and says so

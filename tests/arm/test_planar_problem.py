@@ -60,7 +60,7 @@ def test_paper_preset_reaches_the_optimum_of_a_small_instance():
 def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
     # fixed configurations: the MILP certifies the optimum of this very matrix
     problem = PlanarProblem(builtin_case(case, arm, seed=0), arm, time_model=model,
-                                configurations="fixed")
+                            configurations="fixed")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=0)
     assert result.total_time == pytest.approx(optimum, rel=1e-9)
@@ -68,7 +68,7 @@ def test_builtin_cases_reach_the_certified_optimum(arm, case, model):
 
 def test_result_is_consistent(arm):
     problem = PlanarProblem(builtin_case("square20", arm), arm, time_model="trapezoid",
-                                first=7)
+                            first=7)
     r = solve(problem, seed=4, params=SolverParams(bound_max_nodes=0))  # no early bound stop
     assert r.order[0] == 7
     assert sorted(r.order.tolist()) == list(range(20))
@@ -175,7 +175,7 @@ def test_bad_first_subtask_and_missing_inputs(arm):
 @pytest.mark.parametrize("seed", range(4))
 def test_lower_bound_is_below_the_certified_optimum_and_the_answer(arm, seed):
     problem = PlanarProblem(random_subtasks(arm, 12 + seed, seed=seed), arm,
-                                time_model="trapezoid")
+                            time_model="trapezoid")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=seed, certify=True)
     assert result.lower_bound is not None
@@ -217,7 +217,7 @@ def test_chosen_configurations_are_certified_against_brute_force(robot, seed):
     assert result.certified == "optimal (proven)"
     # a poor incumbent (the index order, first reachable configurations) changes nothing
     first = np.argmax(np.isfinite(problem.timing.branch_joints).all(axis=2), axis=1)
-    proven = proven_configured_optimum(problem, np.arange(7), first, 60.0)
+    proven = proven_configured_optimum(problem.tour_problem, np.arange(7), first, 60.0)
     assert proven == pytest.approx(optimum, rel=1e-12)
 
 
@@ -237,7 +237,7 @@ def test_default_settings_reach_the_certified_optimum_of_new_40_and_60_subtask_s
     # certifies the optimum of the fixed-configuration matrix
     arm = load_planar_arm(robot)
     problem = PlanarProblem(random_subtasks(arm, n, seed=1000 + seed), arm, time_model=model,
-                                configurations="fixed")
+                            configurations="fixed")
     optimum, _ = milp_optimum(problem.matrix)
     result = solve(problem, seed=seed)
     assert result.total_time == pytest.approx(optimum, rel=1e-9)

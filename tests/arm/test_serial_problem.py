@@ -238,3 +238,31 @@ def test_cpu_split_reports_compilation_apart(solved) -> None:
     _, result = solved
     assert set(result.cpu) == {"ik", "collision", "matrix", "search", "compile"}
     assert all(v >= 0.0 for v in result.cpu.values())
+
+
+def test_the_planned_leg_time_is_the_executed_one_with_jerk_limits() -> None:
+    """The joint model the search optimises is ruckig's jerk-limited straight line (the
+    Panda has jerk limits), not a trapezoid that ignores them."""
+    from subtask_opt.arm.serial import load_serial_arm
+    from subtask_opt.arm.timing.joint_legs import (
+        joint_limits,
+        ruckig_leg_time,
+        trapezoid_leg_times,
+    )
+
+    arm = load_serial_arm("panda")
+    lim = arm.limits
+    assert lim.jerk is not None
+    model = joint_limits(lim.velocity, lim.acceleration, lim.jerk)
+    rng = np.random.default_rng(11)
+    qa = rng.uniform(lim.lower, lim.upper, (40, 7))
+    qb = np.clip(qa + rng.normal(0, 0.4, (40, 7)) * rng.random((40, 1)), lim.lower, lim.upper)
+    planned = np.array([trapezoid_leg_times(a, b, model)[0, 0]
+                        for a, b in zip(qa, qb, strict=True)])
+    executed = np.array([ruckig_leg_time(a, b, lim.velocity, lim.acceleration, lim.jerk)
+                         for a, b in zip(qa, qb, strict=True)])
+    np.testing.assert_allclose(planned, executed, rtol=1e-6)
+    without = np.array([trapezoid_leg_times(a, b, joint_limits(lim.velocity,
+                                                                lim.acceleration))[0, 0]
+                        for a, b in zip(qa, qb, strict=True)])
+    assert np.all(without <= executed * (1 + 1e-9)) and np.any(without < 0.99 * executed)

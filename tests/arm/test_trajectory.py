@@ -149,7 +149,7 @@ def test_validator_catches_the_jerk_of_an_acceleration_limited_tour() -> None:
                                                           jl.acceleration))
     problem, result = _solved("planar_2r", "square20", "line")
     free_problem = PlanarProblem(problem.subtasks, free, time_model="line",
-                                     configurations="optimize")
+                                 configurations="optimize")
     free_result = solve(free_problem, seed=0)
     jerky = tour_trajectory(free_problem, free_result)
     judged = TourTrajectory(arm, jerky.legs, jerky.predicted_time, "line")
@@ -225,7 +225,7 @@ def test_figures_and_animation(tmp_path) -> None:
 
     arm = _arm("planar_2r")
     problem = PlanarProblem(random_subtasks(arm, 6, seed=0), arm, time_model="line",
-                                configurations="optimize")
+                            configurations="optimize")
     result = solve(problem, seed=0)
     trajectory = tour_trajectory(problem, result)
     fig = plot_joint_profiles(trajectory)
@@ -296,7 +296,7 @@ def test_solution_figure(tmp_path, n: int) -> None:
 
     arm = _arm("planar_2r")
     problem = PlanarProblem(random_subtasks(arm, n, seed=2), arm, time_model="joint",
-                                configurations="optimize")
+                            configurations="optimize")
     result = solve(problem, seed=0)
     fig = solution_figure(result, problem)
     tour_ax = fig.axes[0]

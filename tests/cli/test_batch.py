@@ -128,3 +128,41 @@ def test_bad_input_prints_one_line_and_exits_2(parts, argv, needle, capsys, monk
     assert len(err.strip().splitlines()) == 1, err
     assert needle in err
     assert not (parts / "o.json").exists()
+
+
+UR5_ROWS = ("x,y,z,dx,dy,dz\n0.45,-0.15,0.20,1,0,-0.3\n0.45,0.05,0.20,1,0,-0.3\n"
+            "0.42,-0.10,0.35,1,0,-0.3\n0.42,0.10,0.35,1,0,-0.3\n")
+
+
+def test_a_serial_arm_batch_of_target_files_and_its_refusals(tmp_path, capsys):
+    import numpy as np
+
+    import subtask_opt as so
+
+    files = []
+    for k in range(2):
+        path = tmp_path / f"holes{k}.csv"
+        lines = UR5_ROWS.splitlines()
+        path.write_text("\n".join([lines[0], *lines[1 + k:]]) + "\n")
+        files.append(path)
+    out = tmp_path / "b.json"
+    home = "0,-90,90,-90,-90,0"
+    code = main(["batch", *map(str, files), "--robot", "ur5", "--home", home, "--workers",
+                 "0", "--seed", "4", "--json", str(out)])
+    assert code == 0
+    jobs = {j["id"]: j for j in json.loads(out.read_text())["jobs"]}
+    for path in files:
+        solo = so.solve(so.ArmProblem(so.load_targets(path), so.load_robot("ur5"),
+                                      home=np.radians([0, -90, 90, -90, -90, 0])), seed=4)
+        assert jobs[str(path)]["order"] == [int(i) for i in solo.order]
+        assert jobs[str(path)]["total_time"] == solo.total_time
+    capsys.readouterr()
+    manifest = tmp_path / "jobs.json"
+    manifest.write_text(json.dumps([{"id": "a", "case": "square20"}]))
+    for argv, word in ((["batch", str(manifest), "--robot", "ur5"], "--robot"),
+                       (["batch", str(files[0]), "--scene", str(manifest)], "scene"),
+                       (["batch", str(files[0]), "--robot", "ur5", "--time-model", "line"],
+                        "time_model")):
+        assert main([*argv, "--json", str(tmp_path / "x.json"), "--workers", "0"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and word in err[0], err

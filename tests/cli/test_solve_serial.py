@@ -42,11 +42,12 @@ def test_documented_command_writes_json_and_trajectory(files, capsys) -> None:
     doc = json.loads(out_json.read_text())
     assert sorted(doc["order"]) == [0, 1, 2, 3]
     assert len(doc["configurations"]) == 4 and len(doc["configurations"][0]) == 6
-    np.testing.assert_allclose(doc["home"], np.radians([0, -90, 90, -90, -90, 0]))
+    np.testing.assert_allclose(doc["report"]["home"], np.radians([0, -90, 90, -90, -90, 0]))
     assert doc["total_time"] == pytest.approx(sum(doc["leg_times"]))
     assert doc["trajectory"]["valid"] is True
-    assert doc["collision_checked"] is True
-    assert set(doc["cpu_s"]) == {"ik", "collision", "matrix", "search", "compile"}
+    assert doc["report"]["collision_checked"] is True
+    assert set(doc["report"]["cpu_s"]) == {"ik", "collision", "matrix", "search", "compile"}
+    assert doc["robot"] == "ur5" and doc["time_model"] == "joint"
     header = out_csv.read_text().splitlines()[0]
     assert header == "t,q1,q2,q3,q4,q5,q6,dq1,dq2,dq3,dq4,dq5,dq6,x,y,z"
     last_t = float(out_csv.read_text().splitlines()[-1].split(",")[0])

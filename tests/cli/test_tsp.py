@@ -9,8 +9,8 @@ import pytest
 
 from subtask_opt.cli.app import main
 from subtask_opt.tour.tsplib import parse_tsplib
-from tests.tour.test_tsplib import BURMA14, BURMA14_OPT, GR17, GR17_OPT
 from tests.conftest import SHARED_DATA
+from tests.tour.test_tsplib import BURMA14, BURMA14_OPT, GR17, GR17_OPT
 
 
 @pytest.fixture()

@@ -101,7 +101,7 @@ def test_plane_view_keeps_distances_of_planar_targets(ur5):
     ({"targets": np.zeros((0, 3))}, "at least one target"),
     ({"targets": np.zeros((3, 2))}, "targets must have shape"),
     ({"tool_path": np.zeros((1, 3))}, "at least 2 points"),
-    ({"leg_times": np.ones(3)}, r"leg_times must have shape \(4,\)"),
+    ({"leg_times": np.ones(2)}, r"leg_times must have shape \(4,\)"),
     ({"leg_times": -np.ones(4)}, "leg_times must be >= 0"),
     ({"leg_times": np.array([1, 1, np.inf, 1])}, "leg_times must be finite"),
     ({"order": np.array([0, 0, 1])}, "order must be a permutation"),

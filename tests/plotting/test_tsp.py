@@ -7,7 +7,7 @@ import pytest
 
 from subtask_opt.plotting.tsp import plot_tour, save_tour_figure
 from subtask_opt.tour.tsplib import TspSolution, parse_tsplib
-from tests.arm.test_tsplib import BURMA14, GR17
+from tests.tour.test_tsplib import BURMA14, GR17
 
 
 def _solution(n: int) -> TspSolution:

@@ -100,7 +100,7 @@ def test_joint_aware_solution_equals_brute_force(robot: str, model: str, n: int,
                                                  seed: int) -> None:
     arm = _arm(robot)
     problem = PlanarProblem(random_subtasks(arm, n, seed=seed), arm, time_model=model,
-                                configurations="optimize")
+                            configurations="optimize")
     result = solve(problem, seed=seed)
     assert result.total_time == pytest.approx(_brute_force(problem.timing.branch_times),
                                               rel=1e-12)
@@ -131,7 +131,7 @@ def test_optimizing_is_never_worse_than_a_fixed_branch() -> None:
 def test_same_seed_same_configured_result() -> None:
     arm = _arm("asr_twodof")
     problem = PlanarProblem(random_subtasks(arm, size(25, 6), seed=1), arm,
-                                time_model="line", configurations="optimize")
+                            time_model="line", configurations="optimize")
     gens = MaxGenerations(size(60, 15))
     for params in (SolverParams(), SolverParams.paper()):
         a = solve(problem, seed=5, params=params, stop=gens)
@@ -147,7 +147,7 @@ def test_a_subtask_with_one_configuration_gets_it() -> None:
     pts = np.array([[-0.545, -0.198], [0.3, 0.1], [0.4, -0.2], [0.25, 0.3]])
     assert np.isnan(arm.ik(pts[0])[0]).all() and np.isfinite(arm.ik(pts[0])[1]).all()
     problem = PlanarProblem(SubtaskSet(pts), arm, time_model="joint",
-                                configurations="optimize")
+                            configurations="optimize")
     result = solve(problem, seed=0)
     assert result.report.configurations[0] == 1
     assert result.total_time == pytest.approx(_brute_force(problem.timing.branch_times))

@@ -257,7 +257,7 @@ def test_arm_home_point_matches_brute_force(arm_problem) -> None:
     result = solve(problem, seed=2, constraints=c)
     # the oracle: the same arm problem with the home built as an 8th row by hand
     with_home = PlanarProblem(SubtaskSet(np.vstack([subtasks.points, home])), arm,
-                                  time_model="trapezoid")
+                              time_model="trapezoid")
     as_matrix = TourConstraints(home=7, precedence=c.precedence)
     assert result.total_time == pytest.approx(brute_force(with_home.matrix, as_matrix),
                                               rel=1e-9)

@@ -194,7 +194,7 @@ def test_elkai_gtsp_search_limits_still_give_a_valid_answer():
 def test_elkai_gtsp_repairs_a_tour_that_splits_a_cluster(monkeypatch):
     """A tour LKH stopped early on (a cluster's configurations not in one run) is read as
     the order of first visits, with the configurations chosen exactly for that order."""
-    from subtask_opt.arm import peers
+    from subtask_opt.tour import peers
 
     layers = [np.full((2, 4), float(i)) + np.arange(2)[:, None] for i in range(4)]
     home = np.zeros(4)

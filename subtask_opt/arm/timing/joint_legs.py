@@ -8,13 +8,15 @@ Two models of the same move q_a -> q_b (every joint starts and ends at rest):
   which is what the leg collision sweep checks), so s may move at most
   ``V = min_j v_j / d_j`` and accelerate at most ``A = min_j a_j / d_j``; the
   time is ``2 / sqrt(A)`` when full speed is never reached (``V^2 / A >= 1``)
-  and ``1 / V + V / A`` otherwise. Vectorised: an (a, n) by (b, n) pair of configuration sets gives
-  the (a, b) matrix of leg times in one numba kernel. This is the time model
-  the sequencer searches with.
+  and ``1 / V + V / A`` otherwise. With jerk limits, s also jerks at most
+  ``J = min_j j_j / d_j`` and the time is the exact 7-segment profile's
+  (:func:`~subtask_opt.arm._kinematics_kernels.scurve_time_nb`). Vectorised: an (a, n)
+  by (b, n) pair of configuration sets gives the (a, b) matrix of leg times in one numba
+  kernel. This is the time model the sequencer searches with: the ``joint`` model.
 * :func:`ruckig_leg_time` - ruckig's time-optimal profile of the same
   straight joint line with the arm's jerk limits (the executed time,
-  :class:`StraightLeg`); without jerk limits it equals the trapezoid time (to
-  round-off), with them it is longer.
+  :class:`StraightLeg`): equal to the first to round-off, so the time the search
+  optimises is the time the trajectory drives (``tests/arm/test_serial.py``).
 """
 
 from __future__ import annotations
@@ -25,34 +27,42 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from subtask_opt.arm._kinematics_kernels import scurve_time_nb
 from subtask_opt.base.errors import ParameterError
 
 
 class JointLimits(NamedTuple):
-    """Per-joint velocity and acceleration limits, (n,) float64 each, > 0."""
+    """Per-joint velocity, acceleration and jerk limits, (n,) float64 each, > 0; ``jerk``
+    empty (0,) when the arm has none."""
 
     velocity: np.ndarray
     acceleration: np.ndarray
+    jerk: np.ndarray = np.zeros(0)
 
 
-def joint_limits(velocity: Any, acceleration: Any) -> JointLimits:
+def joint_limits(velocity: Any, acceleration: Any, jerk: Any = None) -> JointLimits:
     """Validated :class:`JointLimits` (ParameterError naming the bad field)."""
     v = np.ascontiguousarray(velocity, dtype=np.float64)
     a = np.ascontiguousarray(acceleration, dtype=np.float64)
-    for name, arr in (("velocity", v), ("acceleration", a)):
+    j = np.zeros(0) if jerk is None else np.ascontiguousarray(jerk, dtype=np.float64)
+    for name, arr in (("velocity", v), ("acceleration", a), ("jerk", j)):
+        if name == "jerk" and jerk is None:
+            continue
         if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
             raise ParameterError(f"JointLimits.{name} must be a non-empty list of finite "
                                  f"values > 0, got {arr.tolist()}")
-    if v.shape != a.shape:
-        raise ParameterError(f"JointLimits.velocity and acceleration must have the same "
-                             f"length, got {v.size} and {a.size}")
-    return JointLimits(v, a)
+    if v.shape != a.shape or (jerk is not None and j.shape != v.shape):
+        raise ParameterError(f"JointLimits.velocity, acceleration and jerk must have the same "
+                             f"length, got {v.size}, {a.size} and {j.size}")
+    return JointLimits(v, a, j)
 
 
 @njit(cache=True, inline="always")
-def _leg_time(qa, r, qb, c, inv_v, inv_a):
+def _leg_time(qa, r, qb, c, inv_v, inv_a, inv_j):
     tv = 0.0  # 1 / V: the path parameter's speed limit
     ta = 0.0  # 1 / A: its acceleration limit
+    tj = 0.0  # 1 / J: its jerk limit (when the arm has jerk limits)
+    jerk = inv_j.shape[0] > 0
     for j in range(inv_v.shape[0]):
         d = abs(qb[c, j] - qa[r, j])
         x = d * inv_v[j]
@@ -61,21 +71,31 @@ def _leg_time(qa, r, qb, c, inv_v, inv_a):
         y = d * inv_a[j]
         if y > ta:
             ta = y
+        if jerk:
+            z = d * inv_j[j]
+            if z > tj:
+                tj = z
+    out = 0.0
     if tv == 0.0:
-        return 0.0
-    if ta >= tv * tv:  # full speed never reached: a triangle
-        return 2.0 * math.sqrt(ta)
-    return tv + ta / tv
+        out = 0.0
+    elif jerk:
+        out = scurve_time_nb(1.0, 1.0 / tv, 1.0 / ta, 1.0 / tj)
+    elif ta >= tv * tv:  # full speed never reached: a triangle
+        out = 2.0 * math.sqrt(ta)
+    else:
+        out = tv + ta / tv
+    return out
 
 
 @njit(cache=True)
 def _trapezoid_matrix(qa, qb, limits):
     inv_v = 1.0 / limits.velocity
     inv_a = 1.0 / limits.acceleration
+    inv_j = 1.0 / limits.jerk
     out = np.empty((qa.shape[0], qb.shape[0]))
     for r in range(qa.shape[0]):
         for c in range(qb.shape[0]):
-            out[r, c] = _leg_time(qa, r, qb, c, inv_v, inv_a)
+            out[r, c] = _leg_time(qa, r, qb, c, inv_v, inv_a, inv_j)
     return out
 
 
@@ -85,6 +105,7 @@ def _trapezoid_square(q, limits):
     (exactly symmetric; half the arithmetic, and the tiles keep the mirror writes local)."""
     inv_v = 1.0 / limits.velocity
     inv_a = 1.0 / limits.acceleration
+    inv_j = 1.0 / limits.jerk
     m = q.shape[0]
     out = np.empty((m, m))
     tile = 64
@@ -92,7 +113,7 @@ def _trapezoid_square(q, limits):
         for c0 in range(r0, m, tile):
             for r in range(r0, min(r0 + tile, m)):
                 for c in range(max(c0, r), min(c0 + tile, m)):
-                    t = _leg_time(q, r, q, c, inv_v, inv_a)
+                    t = _leg_time(q, r, q, c, inv_v, inv_a, inv_j)
                     out[r, c] = t
                     out[c, r] = t
     return out
