@@ -13,6 +13,7 @@ from subtask_opt.planners.agv.navigation import (
     landmarks,
     navigate,
     near_points,
+    room_corners,
     segment_route,
 )
 from subtask_opt.planners.agv.quadtree import WHITE
@@ -155,3 +156,10 @@ def test_navigation_finds_a_route_iff_the_grid_planner_does(case):
     assert route[-1].tolist() == list(goal)
     assert not _crosses_obstacle(occ, route)
     assert all(tree.segment_free(a, b) for a, b in zip(route[:-1], route[1:], strict=True))
+
+
+def test_room_corners_are_the_free_corners_of_the_map():
+    occ = np.zeros((4, 6), dtype=bool)
+    occ[3, 5] = True
+    assert sorted(map(tuple, room_corners(occ))) == [(-0.5, -0.5), (-0.5, 3.5), (5.5, -0.5)]
+
