@@ -11,7 +11,9 @@ The grid family's exact integer kernel
 segments between cell centres; :func:`tree_segment_free` applies the same rule
 to segments with any end points, by descending the quadtree (the AGV drifts
 off cell centres). A test checks that both agree on every segment between
-cell centres.
+cell centres. The AGV's routes also keep a clearance from walls: with
+``clearance > 0`` a segment is blocked when it comes within that distance of a
+blocked square (:func:`segment_near_box`); 0 is the rule above.
 """
 
 from __future__ import annotations
@@ -79,17 +81,67 @@ def segment_meets_box(x0, y0, x1, y1, lo_x, lo_y, hi_x, hi_y):
 
 
 @njit(cache=True)
-def tree_segment_free(nodes, children, width, height, x0, y0, x1, y1):
-    """Whether a segment touches only white quadtree leaves.
+def _point_box_dist2(px, py, lo_x, lo_y, hi_x, hi_y):
+    """Squared distance from a point to the closed box (0 inside)."""
+    dx = max(lo_x - px, 0.0, px - hi_x)
+    dy = max(lo_y - py, 0.0, py - hi_y)
+    return dx * dx + dy * dy
+
+
+@njit(cache=True)
+def _point_segment_dist2(px, py, x0, y0, x1, y1):
+    """Squared distance from a point to the segment (x0, y0)-(x1, y1)."""
+    dx = x1 - x0
+    dy = y1 - y0
+    den = dx * dx + dy * dy
+    f = 0.0
+    if den > 0.0:
+        f = min(1.0, max(0.0, ((px - x0) * dx + (py - y0) * dy) / den))
+    ex = x0 + f * dx - px
+    ey = y0 + f * dy - py
+    return ex * ex + ey * ey
+
+
+@njit(cache=True)
+def segment_near_box(x0, y0, x1, y1, lo_x, lo_y, hi_x, hi_y, clearance):
+    """Whether the segment comes within ``clearance`` of the closed box
+    (distance <= clearance; with 0, whether it meets the box, exactly).
+
+    Two disjoint convex sets are closest between a vertex of one and the
+    other, so the distance is the least of the end points' distances to the
+    box and the box corners' distances to the segment.
+    """
+    if clearance <= 0.0:
+        return segment_meets_box(x0, y0, x1, y1, lo_x, lo_y, hi_x, hi_y)
+    if not segment_meets_box(x0, y0, x1, y1, lo_x - clearance, lo_y - clearance,
+                             hi_x + clearance, hi_y + clearance):
+        return False
+    if segment_meets_box(x0, y0, x1, y1, lo_x, lo_y, hi_x, hi_y):
+        return True
+    c2 = clearance * clearance
+    if _point_box_dist2(x0, y0, lo_x, lo_y, hi_x, hi_y) <= c2 \
+            or _point_box_dist2(x1, y1, lo_x, lo_y, hi_x, hi_y) <= c2:
+        return True
+    return (_point_segment_dist2(lo_x, lo_y, x0, y0, x1, y1) <= c2
+            or _point_segment_dist2(hi_x, lo_y, x0, y0, x1, y1) <= c2
+            or _point_segment_dist2(lo_x, hi_y, x0, y0, x1, y1) <= c2
+            or _point_segment_dist2(hi_x, hi_y, x0, y0, x1, y1) <= c2)
+
+
+@njit(cache=True)
+def tree_segment_free(nodes, children, width, height, x0, y0, x1, y1, clearance):
+    """Whether a segment keeps more than ``clearance`` from every blocked
+    quadtree leaf (with 0: touches only white leaves).
 
     ``nodes`` (n, 5): x0, y0, size, colour (0 white, 1 black, 2 grey), depth;
     ``children`` (n, 4): child indices, -1 where none (a leaf, or a quarter
-    wholly outside the grid). A segment reaching the grid's border line or
-    beyond is blocked, as the cells outside count as blocked.
+    wholly outside the grid). The cells outside the grid count as blocked: a
+    segment within ``clearance`` of the grid's border line (or reaching it)
+    is blocked.
     """
-    lo = -0.5
-    if min(x0, x1) <= lo or min(y0, y1) <= lo or max(x0, x1) >= width - 0.5 \
-            or max(y0, y1) >= height - 0.5:
+    lo = -0.5 + clearance
+    if min(x0, x1) <= lo or min(y0, y1) <= lo or max(x0, x1) >= width - 0.5 - clearance \
+            or max(y0, y1) >= height - 0.5 - clearance:
         return False
     stack = np.empty(4 * 64 + 4, dtype=np.int64)
     stack[0] = 0
@@ -100,8 +152,8 @@ def tree_segment_free(nodes, children, width, height, x0, y0, x1, y1):
         nx = nodes[i, 0]
         ny = nodes[i, 1]
         size = nodes[i, 2]
-        if not segment_meets_box(x0, y0, x1, y1, nx - 0.5, ny - 0.5, nx + size - 0.5,
-                                 ny + size - 0.5):
+        if not segment_near_box(x0, y0, x1, y1, nx - 0.5, ny - 0.5, nx + size - 0.5,
+                                ny + size - 0.5, clearance):
             continue
         colour = nodes[i, 3]
         if colour == 0:
@@ -141,8 +193,11 @@ def predict_min_separation(pts, cum, motion, obs_pos, obs_vel):
     The AGV moves along its path ahead (``pts``, cumulative lengths ``cum``)
     as :class:`Motion` says; each obstacle keeps the velocity estimated from
     its last two positions. Returns ``(min distance, index of that obstacle,
-    step of it)`` over steps 1..``motion.steps`` (index -1 when there is no
-    obstacle).
+    step of it)`` over the time from step 1 to step ``motion.steps``,
+    continuous in between: during a step both move straight, and the
+    closest approach of two straight motions is found in closed form (a
+    pass between two samples is not missed). Index -1 when there is no
+    obstacle.
     """
     best = np.inf
     best_j = -1
@@ -151,6 +206,8 @@ def predict_min_separation(pts, cum, motion, obs_pos, obs_vel):
     v = motion.v0
     dt = motion.dt
     m = obs_pos.shape[0]
+    qx = 0.0
+    qy = 0.0
     for k in range(1, motion.steps + 1):
         if v < motion.v_target:
             v = min(v + motion.a_max * dt, motion.v_target)
@@ -162,9 +219,16 @@ def predict_min_separation(pts, cum, motion, obs_pos, obs_vel):
         for j in range(m):
             dx = px - (obs_pos[j, 0] + obs_vel[j, 0] * t)
             dy = py - (obs_pos[j, 1] + obs_vel[j, 1] * t)
-            d = math.sqrt(dx * dx + dy * dy)
+            if k > 1:  # relative motion from the last step's (ex, ey) to (dx, dy)
+                ex = qx - (obs_pos[j, 0] + obs_vel[j, 0] * (t - dt))
+                ey = qy - (obs_pos[j, 1] + obs_vel[j, 1] * (t - dt))
+                d = math.sqrt(_point_segment_dist2(0.0, 0.0, ex, ey, dx, dy))
+            else:
+                d = math.sqrt(dx * dx + dy * dy)
             if d < best:
                 best = d
                 best_j = j
                 best_k = k
+        qx = px
+        qy = py
     return best, best_j, best_k

@@ -34,8 +34,10 @@ cost-to-go, a Dijkstra over the quadtree's free leaves, is what makes the
 choice complete - the bare greedy rule can cycle) and repeat from it (3-4).
 Only near points with a smaller cost-to-go than the current point count, so
 the route is finite; when no near point qualifies the AGV moves one leaf
-along the quadtree path (via the midpoint of the shared edge). Rules 3-2 and 3-3 (keep or reduce the
-acceleration) belong to the simulation's t-second check.
+along the quadtree path (square across the middle of the shared edge). Rules
+3-2 and 3-3 (keep or reduce the acceleration) belong to the simulation's
+t-second check. Straight legs keep a clearance from walls (``navigate``'s
+``clearance``), a margin for the AGV's position error.
 
 **Path-planning rules 1-5 (§3.1) as the route-segmentation step**
 (:func:`segment_route`):
@@ -87,7 +89,7 @@ from subtask_opt.planners.agv.quadtree import (
 )
 
 __all__ = ["Section", "detect_corners", "landmarks", "navigate", "near_points",
-           "routing_map", "segment_route"]
+           "room_corners", "routing_map", "segment_route"]
 
 
 def routing_map(states: np.ndarray) -> np.ndarray:
@@ -159,6 +161,18 @@ def landmarks(occupancy: np.ndarray) -> np.ndarray:
     return np.unique((c + n) / 2.0, axis=0)
 
 
+def room_corners(occupancy: np.ndarray) -> np.ndarray:
+    """Check points (k, 2) where the map's border walls meet: the outer
+    vertex of each of the four corner cells that is free (the area outside
+    the map is wall, so these are corners of the room the AGV sees)."""
+    occ = np.asarray(occupancy, dtype=bool)
+    h, w = occ.shape
+    out = [(x + 0.5 * sx, y + 0.5 * sy) for x, y, sx, sy in
+           ((0, 0, -1, -1), (w - 1, 0, 1, -1), (0, h - 1, -1, 1), (w - 1, h - 1, 1, 1))
+           if not occ[y, x]]
+    return np.unique(np.array(out, dtype=float).reshape(-1, 2), axis=0)
+
+
 def _angle(u: np.ndarray, v: np.ndarray) -> float:
     nu, nv = math.hypot(u[0], u[1]), math.hypot(v[0], v[1])
     if nu == 0 or nv == 0:
@@ -199,7 +213,8 @@ def _point_cost(tree: Quadtree, cost: dict[int, float], p: np.ndarray) -> float:
 
 
 def navigate(tree: Quadtree, occupancy: np.ndarray, start: Any, target: Any, *,
-             turn_weight: float = 1.0, points: np.ndarray | None = None) -> np.ndarray:
+             turn_weight: float = 1.0, points: np.ndarray | None = None,
+             clearance: float = 0.0) -> np.ndarray:
     """Sub-goals (k, 2) from ``start`` to ``target`` by rules 3-1 ... 3-4.
 
     ``tree`` is the quadtree of ``occupancy`` (the routing map); the
@@ -207,6 +222,13 @@ def navigate(tree: Quadtree, occupancy: np.ndarray, start: Any, target: Any, *,
     (:func:`leaf_costs`) plus the distance to the leaf's centre. ``start``
     may be any point of a free leaf; ``target`` is a free cell centre. The
     last row is ``target``. ``points`` overrides the near points.
+    ``clearance`` (cells): a straight leg (rules 3-1, 3-4) must keep more than
+    this distance from blocked cells and the map border
+    (:meth:`Quadtree.segment_free`). The one-leaf steps of the fallback are
+    not tested (so the search stays complete): they cross into the next leaf
+    square to the shared edge, between points half a cell inside either leaf,
+    which keeps half a cell from every blocked cell when the step starts half
+    a cell inside its leaf (cell centres do).
 
     Raises:
         NoPathError: the target cannot be reached on this map.
@@ -224,7 +246,7 @@ def navigate(tree: Quadtree, occupancy: np.ndarray, start: Any, target: Any, *,
     heading = tgt - pos
     out: list[np.ndarray] = []
     for _ in range(len(pts) + 2 * len(tree.nodes) + 2):
-        if tree.segment_free(pos, tgt):  # rule 3-1
+        if tree.segment_free(pos, tgt, clearance):  # rule 3-1
             out.append(tgt)
             return np.array(out)
         here = _point_cost(tree, cost, pos)
@@ -233,7 +255,7 @@ def navigate(tree: Quadtree, occupancy: np.ndarray, start: Any, target: Any, *,
         best, best_val = None, math.inf
         for i in np.flatnonzero(pcost < here - 1e-9):
             c = pts[i]
-            if not tree.segment_free(pos, c):
+            if not tree.segment_free(pos, c, clearance):
                 continue
             d = c - pos
             val = math.hypot(d[0], d[1]) + pcost[i] + turn_weight * _angle(heading, d)
@@ -246,9 +268,10 @@ def navigate(tree: Quadtree, occupancy: np.ndarray, start: Any, target: Any, *,
                 raise NoPathError(f"no route from ({pos[0]:.2f}, {pos[1]:.2f}) to target "
                                   f"{tcell}")
             b = toward[a]
-            mid = np.array(free_adjacency_midpoint(tree, a, b))
-            out.append(mid)
             best = np.array(_centre(tree.nodes[b]))
+            for q in _crossing(tree, a, b):
+                if not (np.array_equal(q, pos) or np.array_equal(q, best)):
+                    out.append(q)
         heading = best - pos
         out.append(best.copy())
         pos = best.copy()
@@ -309,6 +332,25 @@ def segment_route(route: np.ndarray, tree: Quadtree, *, open_leaf: int = 4,
         start = a + ts[s0] * (b - a) if s0 else a
         sections.append(Section(_xy(start), _xy(b), cls, tuple(dict.fromkeys(run)), leg))
     return sections
+
+
+def _crossing(tree: Quadtree, a: int, b: int) -> tuple[np.ndarray, np.ndarray]:
+    """How the fallback crosses from white leaf ``a`` into ``b``: the points
+    half a cell inside ``a`` and inside ``b``, either side of the midpoint of
+    their shared edge (so the step runs square across it). A point half a cell
+    inside a free leaf keeps half a cell from everything outside it, and so
+    does a segment between two such points of one leaf (the leaf is convex)."""
+    na, nb = tree.nodes[a], tree.nodes[b]
+    mid = np.array(_shared_midpoint(na, nb))
+    if int(na[0]) + int(na[2]) == int(nb[0]):
+        n = np.array([1.0, 0.0])
+    elif int(nb[0]) + int(nb[2]) == int(na[0]):
+        n = np.array([-1.0, 0.0])
+    elif int(na[1]) + int(na[2]) == int(nb[1]):
+        n = np.array([0.0, 1.0])
+    else:
+        n = np.array([0.0, -1.0])
+    return mid - 0.5 * n, mid + 0.5 * n
 
 
 def free_adjacency_midpoint(tree: Quadtree, a: int, b: int) -> tuple[float, float]:

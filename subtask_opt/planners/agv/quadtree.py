@@ -87,12 +87,15 @@ class Quadtree:
     label: np.ndarray
     children: np.ndarray
 
-    def segment_free(self, a: Any, b: Any) -> bool:
+    def segment_free(self, a: Any, b: Any, clearance: float = 0.0) -> bool:
         """Whether the segment a-b (points (x, y), any reals) touches only
-        white leaves and stays off the grid's border line."""
+        white leaves and stays off the grid's border line; with a positive
+        ``clearance`` (cells), whether it keeps more than that distance from
+        every blocked cell and from the border line."""
         h, w = self.shape
         return bool(K.tree_segment_free(self.nodes, self.children, w, h, float(a[0]),
-                                        float(a[1]), float(b[0]), float(b[1])))
+                                        float(a[1]), float(b[0]), float(b[1]),
+                                        float(clearance)))
 
     def leaf_at(self, xy: Any) -> int:
         """Index of the leaf holding the cell nearest to point ``xy``."""

@@ -12,8 +12,9 @@ sonar's 0.2-2 m range to 1-10 cells.
 **Route.** The AGV plans on its *routing map*: only ``00`` cells of the local
 map are routable (:mod:`.navigation`); a quadtree of that map partitions the free
 space, gives the cost-to-go of the sub-goal choice (Dijkstra over its free
-leaves), answers every line-of-sight question and, when the AGV starts a new
-leg, checks the leg
+leaves), answers every line-of-sight question (a planned leg keeps
+``wall_clearance`` from walls, a margin for the position error drift leaves)
+and, when the AGV starts a new leg, checks the leg
 ahead against the AGV's current map (static obstacles it has learned) and
 reports seen obstacles standing in the leaves of that leg. Rules 1-5 (route
 sections), 2-1 ... 2-7 (corners, with the reading of the unreachable rules
@@ -25,16 +26,24 @@ sonar range gets the velocity of its last two positions; the AGV's motion
 along its own path ahead at a candidate speed and the obstacles' straight
 extrapolations are stepped forward for ``horizon_s`` (the time factor); the
 candidate is safe when the predicted distance never falls below
-``safety_distance`` (the distance factor). Candidates: keep cruising; brake to
-``v_brake``; stop; speed up (the paper tries BRAKE first, then SPEED_UP).
+``safety_distance`` (the distance factor); between two look-ahead steps the
+closest approach is solved exactly, so a fast pass is not missed. Candidates:
+keep cruising; brake to ``v_brake``; stop; speed up (the paper tries BRAKE
+first, then SPEED_UP). When none keeps even ``pass_distance`` - an obstacle
+comes at the AGV where it waits for another - the AGV backs off up to
+``back_off`` along the way it came (if that predicts more room) and returns
+once the way is clear.
 
 **Crossing rules (§4.1 (5-2), §4.2.2).** The first point where an obstacle's
 extrapolated ray meets the AGV's path decides who enters first:
 
 * AGV first (5-2-1): the AGV keeps its normal speed as long as the look-ahead
-  predicts no contact (separation >= ``collision_distance``), otherwise it
-  falls back to the collision check. With ``speed_up_to_pass`` it speeds up
-  to ``v_max`` to pass instead (an option; not the paper's rule).
+  predicts a separation of at least ``pass_distance`` (a margin over
+  ``collision_distance`` for what the prediction cannot know), otherwise it
+  falls back to the collision check. The decision holds until the AGV gives
+  way after all (brakes or stops for that obstacle): from then on who enters
+  first is judged afresh. With ``speed_up_to_pass`` it speeds up to ``v_max``
+  to pass instead (an option; not the paper's rule).
 * Obstacle first (5-2-2): the t-second check decides (brake, stop, wait).
 * Both at once (arrival times within ``priority_margin_s``): a sidestep via a
   point behind the obstacle's track ("the corner opposite the obstacle") at a
@@ -52,14 +61,25 @@ unless the obstacle leaves - the input is not to blame.
 its true step is its commanded step turned by a heading error (a seeded
 per-run bias plus a random walk) and scaled by a seeded scale error, while it
 believes it moved as commanded. Every ``check_interval_s`` (with
-``check_points`` on) it looks for the nearest corner of the global map within
-sonar range and the camera's field of view, measures it and applies eq. (3):
-``TH = arctan(theta_x / f)`` (bearing of the corner from the image column
-``theta_x`` and the focal length ``f``) and ``X = L cos(TH) / tan(K)``
-(distance from the sensor height ``L`` and the depression angle ``K``), then
-resets its believed position to ``corner - X (cos, sin)(heading + TH)``. The
-believed heading is still off by the heading error, so a fix is not perfect;
+``check_points`` on) it measures the corners of the global map (and of the
+room, where the border walls meet) within sonar range and the camera's field
+of view by eq. (3): ``TH = arctan(theta_x / f)`` (bearing of the corner from
+the image column ``theta_x`` and the focal length ``f``) and ``X = L cos(TH) /
+tan(K)`` (distance from the sensor height ``L`` and the depression angle
+``K``). The nearest corner gives ``corner - X (cos, sin)(heading + TH)``,
+which is off by ``X`` times the heading error: the AGV weighs it against its
+dead reckoning by their expected errors (it tracks its own uncertainty from
+the ``drift_*`` specification). Two corners at bearings far enough apart fix
+the position without the heading (the point at both distances ``X``) and then
+the heading itself, which calibrates the odometry's heading error. After a fix
+the AGV steers back onto its planned leg (``track_lookahead``) rather than
+heading for the next sub-goal along a line nobody checked against the walls.
 :attr:`AgvRun.drift_error` is ``|true - believed|`` at every step.
+
+**Collisions.** A run ends in ``collision`` when the true centres come closer
+than ``collision_distance`` at any time of a step (the closest approach of
+the step's straight motions, not only its end) or when the true motion of a
+step touches a blocked cell's closed square or leaves the map.
 """
 
 from __future__ import annotations
@@ -86,6 +106,7 @@ from subtask_opt.planners.agv.navigation import (
     build_tree,
     landmarks,
     navigate,
+    room_corners,
     routing_map,
     segment_route,
     states_of_occupancy,
@@ -94,7 +115,7 @@ from subtask_opt.planners.agv.quadtree import Quadtree
 from subtask_opt.planners.base import check_seed, register
 from subtask_opt.planners.grid.world import GridWorld
 
-EVENT_KINDS = ("subgoal", "section", "crossing", "brake", "wait", "speed_up", "resume",
+EVENT_KINDS = ("subgoal", "section", "crossing", "brake", "wait", "speed_up", "back_off", "resume",
                "sidestep", "static", "replan", "recovery", "blocked", "check_point", "goal",
                "collision", "timeout", "no_path")
 
@@ -121,6 +142,10 @@ class AgvParams:
         horizon_s: time factor of the t-second check (how far ahead it looks).
         safety_distance: distance factor: a prediction closer than this is a conflict.
         collision_distance: centres closer than this collide (sum of body radii).
+        pass_distance: when the AGV enters a crossing first it keeps its speed
+            only while the look-ahead predicts at least this separation (the
+            margin over ``collision_distance`` absorbs what the prediction
+            cannot know: the heading error of drift, obstacles that turn).
         cell_m: side of a cell in metres (maps the sonar range to cells).
         sonar_min_m, sonar_max_m: sonar range (paper: 0.2 m - 2 m); check
             points are measured only in it, obstacles are first seen within
@@ -149,6 +174,18 @@ class AgvParams:
         camera_height: sensor height ``L`` of eq. (3), cells.
         camera_fov_deg: horizontal field of view; corners outside are not seen.
         open_leaf: quadtree leaves of at least this side are open road (rules 3-4).
+        wall_clearance: every straight leg the AGV plans (route, detour,
+            sidestep) keeps more than this distance (cells) from blocked cells
+            and the map border, a margin for the position error left by drift
+            and check points (below 0.5 one-cell corridors stay routable).
+        back_off: when neither braking, stopping nor speeding up keeps even
+            ``pass_distance`` (an obstacle comes at the AGV where it waits for
+            another), it may back off this far (cells) along the way it came
+            and return once the way is clear; 0: never.
+        track_lookahead: path following: after a position fix the AGV steers
+            back to its leg at the point this far (cells) ahead of its
+            projection on it, instead of heading straight for the next
+            sub-goal from wherever the fix put it.
     """
 
     dt: float = 0.25
@@ -159,6 +196,7 @@ class AgvParams:
     horizon_s: float = 4.0
     safety_distance: float = 1.5
     collision_distance: float = 0.8
+    pass_distance: float = 1.1
     cell_m: float = 0.2
     sonar_min_m: float = 0.2
     sonar_max_m: float = 2.0
@@ -181,6 +219,9 @@ class AgvParams:
     camera_height: float = 1.0
     camera_fov_deg: float = 120.0
     open_leaf: int = 4
+    wall_clearance: float = 0.35
+    back_off: float = 2.0
+    track_lookahead: float = 1.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -189,7 +230,7 @@ class AgvParams:
                 if not isinstance(value, bool):
                     raise ParameterError(f"AgvParams.{f.name} must be a bool, got {value!r}")
             elif f.name in ("turn_weight", "drift_heading_sd_deg", "drift_walk_deg",
-                            "drift_scale_sd"):
+                            "drift_scale_sd", "wall_clearance", "back_off"):
                 require_non_negative("AgvParams", f.name, value)
             elif f.name == "open_leaf":
                 if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 2**20:
@@ -205,6 +246,11 @@ class AgvParams:
             raise ParameterError(
                 f"AgvParams.safety_distance must be >= collision_distance "
                 f"({self.collision_distance!r}), got {self.safety_distance!r}")
+        if not self.collision_distance <= self.pass_distance <= self.safety_distance:
+            raise ParameterError(
+                f"AgvParams.pass_distance must be in [collision_distance, safety_distance] "
+                f"= [{self.collision_distance!r}, {self.safety_distance!r}], "
+                f"got {self.pass_distance!r}")
         if self.sonar_min_m >= self.sonar_max_m:
             raise ParameterError(
                 f"AgvParams.sonar_min_m must be < sonar_max_m ({self.sonar_max_m!r}), "
@@ -541,7 +587,8 @@ def plan_route(world: GridWorld, start: Any, goal: Any, params: AgvParams | None
     g = world.check_cell("goal", goal)
     occ = routing_map(states_of_occupancy(world.occupancy) if states is None else states)
     tree = build_tree(occ)
-    subgoals = navigate(tree, occ, s, g, turn_weight=params.turn_weight)
+    subgoals = navigate(tree, occ, s, g, turn_weight=params.turn_weight,
+                        clearance=params.wall_clearance)
     return np.vstack([np.array(s, dtype=float), subgoals])
 
 
@@ -558,6 +605,72 @@ def line_of_sight(occupancy: np.ndarray, a: Any, b: Any) -> bool:
 
         return segment_hits(occ, int(pa[0]), int(pa[1]), int(pb[0]), int(pb[1]), True) == 0
     return build_tree(occ).segment_free(pa, pb)
+
+
+_DETOUR_TAGS = ("rejoin", "back", "return")
+"""Way points that are not route legs: back to the leg after a fix, and a back-off."""
+_TRAIL_POINTS = 400
+"""The AGV remembers this many of its last positions (the way back of a back-off)."""
+_MAX_CORNERS_MEASURED = 8
+"""A check point measures at most this many visible corners, nearest first."""
+_MIN_FIX_ANGLE = math.radians(20.0)
+"""Two corners fix the position only when their bearings differ by at least this."""
+
+
+def _two_corner_fix(marks: np.ndarray, seen: list[tuple[int, float, float]],
+                    pixel: float = 1e-3
+                    ) -> tuple[np.ndarray, float, tuple[int, int], float, float] | None:
+    """Position and heading from two measured corners (``seen``: corner
+    index, bearing ``TH`` from the heading, distance ``X``), using the pair
+    whose bearings are farthest from parallel; None when no pair is at least
+    :data:`_MIN_FIX_ANGLE` apart.
+
+    The position is where the circles of radius ``X`` about the two corners
+    meet, on the side where corner j lies at the measured angle ``TH_j -
+    TH_i`` from corner i (a difference of two bearings: the heading cancels).
+    Returns (position, heading, the pair, the expected position error, the
+    nearer distance): ``X`` is off by about ``X tan(TH)`` times the bearing
+    quantisation ``pixel``, and the error of the intersection is those over
+    the sine of the angle between the bearings.
+    """
+    best, pair = math.sin(_MIN_FIX_ANGLE), None
+    for a in range(len(seen)):
+        for b in range(a + 1, len(seen)):
+            q = abs(math.sin(seen[b][1] - seen[a][1]))
+            if q >= best:
+                best, pair = q, (a, b)
+    if pair is None:
+        return None
+    (i, th_i, x_i), (j, th_j, x_j) = seen[pair[0]], seen[pair[1]]
+    mi, mj = marks[i], marks[j]
+    u = mj - mi
+    d = math.hypot(u[0], u[1])
+    u = u / d
+    along = (x_i * x_i - x_j * x_j + d * d) / (2 * d)
+    across = math.sqrt(max(x_i * x_i - along * along, 0.0))
+    sign = 1.0 if math.sin(th_j - th_i) > 0 else -1.0
+    for side in (1.0, -1.0):
+        pos = mi + along * u + side * across * np.array([-u[1], u[0]])
+        a_i, a_j = mi - pos, mj - pos
+        if (a_i[0] * a_j[1] - a_i[1] * a_j[0]) * sign >= 0:
+            break
+    heading_i = math.atan2(a_i[1], a_i[0]) - th_i
+    heading_j = math.atan2(a_j[1], a_j[0]) - th_j
+    heading = math.atan2(math.sin(heading_i) + math.sin(heading_j),
+                         math.cos(heading_i) + math.cos(heading_j))
+    err = pixel * (x_i * abs(math.tan(th_i)) + x_j * abs(math.tan(th_j)) + x_i + x_j) / best
+    return pos, heading, (i, j), err, min(x_i, x_j)
+
+
+def _swept_distance(r0: np.ndarray, r1: np.ndarray) -> np.ndarray:
+    """Least norm of ``r0 + f (r1 - r0)`` over f in [0, 1], row by row: the
+    closest approach of two points moving straight during one step (``r0``,
+    ``r1``: obstacle minus AGV at its start and end)."""
+    d = r1 - r0
+    den = np.einsum("ij,ij->i", d, d)
+    f = np.clip(-np.einsum("ij,ij->i", r0, d) / np.where(den > 0, den, 1.0), 0.0, 1.0)
+    e = r0 + f[:, None] * d
+    return np.hypot(e[:, 0], e[:, 1])
 
 
 def _cumlen(pts: np.ndarray) -> np.ndarray:
@@ -579,6 +692,7 @@ class _Agv:
         self.global_occ = np.asarray(scenario.world.occupancy, dtype=bool)
         self.static_cells = np.zeros_like(self.occ)
         self.pos = route[0].copy()          # where the AGV believes it is
+        self.leg_start = route[0].copy()    # where the current leg began
         self.true = route[0].copy()         # where it is
         self.heading = math.atan2(*(route[-1] - route[0])[::-1]) if len(route) > 1 else 0.0
         self.v = 0.0
@@ -588,6 +702,8 @@ class _Agv:
         self.mode = "cruise"
         self.waiting = False
         self.priority: dict[int, str] = {}
+        self.yielded: set[int] = set()  # obstacles the AGV gave way to after entering first
+        self.trail: list[np.ndarray] = [route[0].copy()]  # believed positions driven, in order
         self.sidestepped: set[int] = set()
         self.static: set[int] = set()
         self.blocked_logged: set[int] = set()
@@ -597,11 +713,16 @@ class _Agv:
         # odometry drift
         self.rng = np.random.default_rng(seed) if p.drift else None
         self.bias = self.scale = self.walk = 0.0
+        self.heading_fix = 0.0  # the heading error the AGV has measured and steers against
+        # what the AGV believes of its own error (std of position, variance of heading)
+        self.pos_sd = 0.0
+        self.heading_var = math.radians(p.drift_heading_sd_deg) ** 2
         if self.rng is not None:
             self.bias = math.radians(float(self.rng.normal(0.0, p.drift_heading_sd_deg)))
             self.scale = float(self.rng.normal(0.0, p.drift_scale_sd))
-        self.marks = landmarks(self.global_occ) if p.drift and p.check_points else np.zeros((0, 2))
-        self.vis_tree = build_tree(self.global_occ) if len(self.marks) else None
+        self.marks = (np.vstack([landmarks(self.global_occ), room_corners(self.global_occ)])
+                      if p.drift and p.check_points else np.zeros((0, 2)))
+        self.wall_tree = build_tree(self.global_occ)  # walls as they are (camera, collisions)
         self.next_check = p.check_interval_s
 
     def log(self, t: float, kind: str, detail: str = "") -> None:
@@ -680,7 +801,9 @@ class _Agv:
         h, w = self.occ.shape
         if not (0 <= side[0] < w and 0 <= side[1] < h) or self.occ[int(side[1]), int(side[0])]:
             return False
-        if not (self.tree.segment_free(self.pos, side) and self.tree.segment_free(side, rejoin)):
+        c = p.wall_clearance
+        if not (self.tree.segment_free(self.pos, side, c)
+                and self.tree.segment_free(side, rejoin, c)):
             return False
         # pts[0] is the AGV and pts[i] is wps[i - 1]: keep what lies beyond the rejoin point
         if i >= pts.shape[0]:
@@ -691,6 +814,7 @@ class _Agv:
             keep_w, keep_t, tag_rejoin = self.wps[i - 1:], self.tags[i - 1:], "recovery"
         self.wps = [side, rejoin] + keep_w
         self.tags = ["sidestep", tag_rejoin] + keep_t
+        self.leg_start = self.pos.copy()
         self.log(t, "sidestep", f"obstacle {j}: pass behind it via "
                                 f"({side[0]:.0f}, {side[1]:.0f})")
         return True
@@ -706,22 +830,22 @@ class _Agv:
             return self._set_mode(t, "cruise", p.v_nominal, -1)
         j = int(ids[jj])
         kind, x_pt, arc = self.classify(pts, cum, obs[jj], vel[jj])
-        if j not in self.priority:
+        if self.priority.get(j) == "agv_first" and j not in self.yielded:
+            kind = "agv_first"  # who enters first is decided once, while the AGV keeps it
+        if self.priority.get(j) != kind:
             self.priority[j] = kind
             self.log(t, "crossing", f"obstacle {j}: {kind}")
-        elif self.priority[j] == "agv_first":
-            kind = "agv_first"  # who enters first is decided once, at the crossing
         self.conflict = j
         order = [("brake", p.v_brake), ("stop", 0.0), ("speed_up", p.v_max)]
         if p.crossing_rules and kind == "agv_first":
             if p.speed_up_to_pass:
                 order = [("speed_up", p.v_max), ("brake", p.v_brake), ("stop", 0.0)]
-            elif sep >= p.collision_distance:  # rule 5-2-1: keep the normal speed
+            elif sep >= p.pass_distance:  # rule 5-2-1: keep the normal speed
                 return self._set_mode(t, "cruise", p.v_nominal, j)
         if p.crossing_rules and kind == "simultaneous" and j not in self.sidestepped \
-                and x_pt is not None:
+                and x_pt is not None and not self.backing:
             self.sidestepped.add(j)
-            saved = (self.wps, self.tags, len(self.events))
+            saved = (self.wps, self.tags, len(self.events), self.leg_start)
             if self.sidestep(t, pts, cum, x_pt, arc, vel[jj], j):
                 new_pts, new_cum = self.ahead()
                 similar = min(p.v_max, max(p.v_brake, math.hypot(*vel[jj])))
@@ -730,16 +854,51 @@ class _Agv:
                     if s >= p.safety_distance:
                         return self._set_mode(t, mode, v_t, j)
                 # no clear way past on the far side either (other obstacles): keep the route
-                self.wps, self.tags = saved[0], saved[1]
+                self.wps, self.tags, self.leg_start = saved[0], saved[1], saved[3]
                 del self.events[saved[2]:]
         best_mode, best_v, best_sep = "stop", 0.0, -math.inf
         for mode, v_t in order:
             s, _ = self.predict(pts, cum, v_t, obs, vel)
             if s >= p.safety_distance:
-                return self._set_mode(t, mode, v_t, j)
+                best_mode, best_v, best_sep = mode, v_t, math.inf
+                break
             if s > best_sep:
                 best_mode, best_v, best_sep = mode, v_t, s
+        # even the best choice ahead comes closer than the prediction can be trusted
+        back = self.back_path() if best_sep < p.pass_distance else None
+        if back is not None:
+            s, _ = self.predict(back, _cumlen(back), p.v_brake, obs, vel)
+            if s > best_sep:  # and backing off keeps more room
+                self.wps = [*back[1:], *back[-2::-1]] + self.wps
+                self.tags = ["back"] * (len(back) - 1) + ["return"] * (len(back) - 1) \
+                    + self.tags
+                best_mode, best_v = "back_off", p.v_brake
+        if best_v < p.v_nominal and kind == "agv_first":
+            self.yielded.add(j)  # it gives way after all: who enters first is open again
         return self._set_mode(t, best_mode, best_v, j)
+
+    @property
+    def backing(self) -> bool:
+        """Whether the AGV is backing off or returning from it."""
+        return bool(self.tags) and self.tags[0] in ("back", "return")
+
+    def back_path(self) -> np.ndarray | None:
+        """The way back (k, 2), from the AGV along the trail it drove, at most
+        ``back_off`` long; None while backing or with less than half a cell."""
+        if self.backing or self.p.back_off <= 0:
+            return None
+        pts, length = [self.pos], 0.0
+        for q in reversed(self.trail):
+            d = math.hypot(*(q - pts[-1]))
+            if d <= 1e-9:
+                continue
+            if length + d >= self.p.back_off:
+                pts.append(pts[-1] + (q - pts[-1]) * ((self.p.back_off - length) / d))
+                length = self.p.back_off
+                break
+            pts.append(q)
+            length += d
+        return np.array(pts) if length >= 0.5 else None
 
     def _set_mode(self, t: float, mode: str, v_target: float, j: int) -> float:
         if mode != self.mode:
@@ -748,6 +907,8 @@ class _Agv:
                 self.log(t, "resume", who)
             elif mode == "speed_up":
                 self.log(t, "speed_up", f"{who}: pass first")
+            elif mode == "back_off":
+                self.log(t, "back_off", f"{who}: back off along the way it came")
             else:
                 self.log(t, "brake", f"{who}: {'stop' if mode == 'stop' else 'slow down'}")
             self.mode = mode
@@ -797,13 +958,14 @@ class _Agv:
             if near[k] < p.safety_distance + 0.5 or self.occ[int(c[1]), int(c[0])]:
                 continue
             i = min(int(np.searchsorted(cum, samples[k], side="right")), len(pts) - 1)
-            if self.tree.segment_free(c, pts[i]):
+            if self.tree.segment_free(c, pts[i], p.wall_clearance):
                 target, seg_end = c, i
                 break
         if target is None:
             target, seg_end = np.array(self.sc.goal, dtype=float), len(pts)
         try:
-            detour = navigate(self.tree, self.occ, self.pos, target, turn_weight=p.turn_weight)
+            detour = navigate(self.tree, self.occ, self.pos, target, turn_weight=p.turn_weight,
+                              clearance=p.wall_clearance)
         except NoPathError as exc:
             self.log(t, "blocked", str(exc))
             return False
@@ -814,6 +976,7 @@ class _Agv:
         last = "goal" if not keep_w else "recovery"
         self.wps = list(detour) + keep_w
         self.tags = ["subgoal"] * (len(detour) - 1) + [last] + keep_t
+        self.leg_start = self.pos.copy()
         self.mode = "replan"
         self.leg_checked = True
         self.log(t, "replan", f"detour of {len(detour)} sub-goal(s), rejoin the route at "
@@ -822,42 +985,115 @@ class _Agv:
 
     # path following: check points against drift ------------------------------------------
     def check_point(self, t: float) -> None:
-        """Find the nearest visible corner and fix the position by eq. (3)."""
+        """Measure the visible corners by eq. (3) and fix the position.
+
+        With two corners in view at bearings far enough apart, the position
+        is the point at their distances ``X`` (eq. (3)'s ``X`` does not depend
+        on the heading) on the side their bearings ``TH`` say, and the
+        bearings then give the true heading, which calibrates the odometry's
+        heading error (:attr:`heading_fix`). That fix is taken when its
+        expected error is below the one-corner fix's.
+
+        With one corner, the nearest, eq. (3) places the AGV on the circle of
+        radius ``X`` about it (exact) at the bearing ``heading + TH``, which
+        is off by ``X`` times the heading error. Along that circle the fix is
+        weighed against dead reckoning by their expected errors (a scalar
+        Kalman gain): the AGV tracks its own position and heading uncertainty
+        from its odometry's specification (the ``drift_*`` parameters), so a
+        far corner seen with an uncalibrated heading does not throw it off.
+        """
         p = self.p
-        if self.vis_tree is None:
+        if len(self.marks) == 0:
             return
         near_r, far_r = p.sonar_range
         rel = self.marks - self.true
         dist = np.hypot(rel[:, 0], rel[:, 1])
-        true_heading = self.heading + self.bias + self.walk
+        true_heading = self.heading + self.bias + self.walk - self.heading_fix
         half_fov = math.radians(p.camera_fov_deg) / 2
+        seen: list[tuple[int, float, float]] = []  # (corner, TH, X)
         for i in np.argsort(dist, kind="stable"):
             r = float(dist[i])
-            if r > far_r:
-                return
+            if r > far_r or len(seen) == _MAX_CORNERS_MEASURED:
+                break
             if r < near_r:
                 continue
             th_true = float(wrap_angle(math.atan2(rel[i, 1], rel[i, 0]) - true_heading))
             if abs(th_true) >= half_fov:
                 continue
             seen_at = self.marks[i] - 0.05 * rel[i] / r
-            if not self.vis_tree.segment_free(self.true, seen_at):
+            if not self.wall_tree.segment_free(self.true, seen_at):
                 continue
             # what the sensor reports: an image column and a depression angle
             theta_x = round(p.camera_f_px * math.tan(th_true))
             k_angle = math.atan2(p.camera_height * math.cos(th_true), r)
             # eq. (3)
             th = math.atan(theta_x / p.camera_f_px)
-            x_dist = p.camera_height * math.cos(th) / math.tan(k_angle)
-            est = self.marks[i] - x_dist * np.array([math.cos(self.heading + th),
-                                                     math.sin(self.heading + th)])
-            moved = float(np.hypot(*(est - self.pos)))
-            self.pos = est
-            self.log(t, "check_point", f"corner ({self.marks[i, 0]:.1f}, "
-                                       f"{self.marks[i, 1]:.1f}) at X = {x_dist:.2f}, TH = "
-                                       f"{math.degrees(th):.1f} deg: position corrected by "
-                                       f"{moved:.2f}")
+            seen.append((int(i), th, p.camera_height * math.cos(th) / math.tan(k_angle)))
+        if not seen:
             return
+        pixel = 0.5 / p.camera_f_px  # bearing quantisation (half a pixel), radians
+        # one corner, the nearest: eq. (3), weighed against dead reckoning along the circle
+        i, th, x_dist = seen[0]
+        m = self.marks[i]
+        est = m - x_dist * np.array([math.cos(self.heading + th), math.sin(self.heading + th)])
+        back = self.pos - m  # dead reckoning's position, moved onto the circle |q - m| = X
+        norm = math.hypot(back[0], back[1])
+        ranged = m + back * (x_dist / norm) if norm > 1e-12 else est
+        meas_var = x_dist * x_dist * (self.heading_var + pixel * pixel)
+        prior_var = self.pos_sd * self.pos_sd
+        gain = prior_var / (prior_var + meas_var) if prior_var + meas_var > 0 else 1.0
+        q = ranged + gain * (est - ranged) - m
+        est = m + q * (x_dist / max(math.hypot(q[0], q[1]), 1e-12))
+        pos_sd = math.sqrt((1.0 - gain) * prior_var)
+        what = (f"corner ({m[0]:.1f}, {m[1]:.1f}) at X = {x_dist:.2f}, TH = "
+                f"{math.degrees(th):.1f} deg")
+        turn = f" (weight {gain:.2f})"
+        # two corners: position and heading, when that is the better fix
+        fix = _two_corner_fix(self.marks, seen, pixel)
+        if fix is not None and fix[3] < pos_sd:
+            est, heading, (i, j), pos_sd, x_min = fix
+            dh = float(wrap_angle(heading - self.heading))
+            self.heading_fix = float(wrap_angle(self.heading_fix + dh))
+            self.heading_var = (pos_sd / x_min) ** 2 + pixel * pixel
+            what = (f"corners ({self.marks[i, 0]:.1f}, {self.marks[i, 1]:.1f}) and "
+                    f"({self.marks[j, 0]:.1f}, {self.marks[j, 1]:.1f})")
+            turn = f", heading by {math.degrees(dh):.1f} deg"
+        self.pos_sd = pos_sd
+        shift = est - self.pos
+        self.pos = est
+        self.log(t, "check_point", f"{what}: position corrected by "
+                                   f"{math.hypot(shift[0], shift[1]):.2f}{turn}")
+        # the way driven and a back-off's way points were believed positions too
+        self.trail = [q + shift for q in self.trail]
+        for k, tag in enumerate(self.tags):
+            if tag not in ("back", "return"):
+                break
+            self.wps[k] = self.wps[k] + shift
+        if not self.backing:
+            self.rejoin_leg()
+
+    def rejoin_leg(self) -> None:
+        """Path following after a fix: the AGV now knows it is beside its leg
+        (``leg_start`` -> the next sub-goal). Rather than head for the
+        sub-goal from there (a line nobody planned), it steers back to the
+        leg at the point ``track_lookahead`` ahead of its projection on it
+        (a ``rejoin`` way point), so it drives the planned, wall-clear route
+        and the look-ahead predicts the path it really takes."""
+        while self.tags and self.tags[0] == "rejoin":
+            self.wps.pop(0)
+            self.tags.pop(0)
+        if not self.wps:
+            return
+        a, b = self.leg_start, self.wps[0]
+        ab = b - a
+        length = math.hypot(ab[0], ab[1])
+        rel = self.pos - a
+        if length <= 1e-12 or abs(ab[0] * rel[1] - ab[1] * rel[0]) / length <= 1e-9:
+            return
+        s = (ab[0] * rel[0] + ab[1] * rel[1]) / length + self.p.track_lookahead
+        if s < length:
+            self.wps.insert(0, a + ab * (max(s, 0.0) / length))
+            self.tags.insert(0, "rejoin")
 
     # motion --------------------------------------------------------------------------------
     def move(self, t: float, v_target: float) -> None:
@@ -865,6 +1101,7 @@ class _Agv:
         if self.rng is not None:
             self.walk += math.radians(float(self.rng.normal(0.0, p.drift_walk_deg))) \
                 * math.sqrt(p.dt)
+            self.heading_var += math.radians(p.drift_walk_deg) ** 2 * p.dt
         if self.v < v_target:
             self.v = min(self.v + p.a_max * p.dt, v_target)
         else:
@@ -877,6 +1114,7 @@ class _Agv:
         self.waiting = False
         step = self.v * p.dt
         start = self.pos.copy()
+        forward = not self.backing
         while step > 0 and self.wps:
             d = self.wps[0] - self.pos
             dist = math.hypot(d[0], d[1])
@@ -884,7 +1122,9 @@ class _Agv:
                 self.pos = self.wps.pop(0)
                 tag = self.tags.pop(0)
                 step -= dist
-                self.leg_checked = False
+                if tag not in _DETOUR_TAGS:  # rejoin, back, return: the leg goes on
+                    self.leg_start = self.pos.copy()
+                    self.leg_checked = False
                 frac = 1.0 - step / (self.v * p.dt)
                 if tag in ("subgoal", "sidestep", "recovery"):
                     detail = f"({self.pos[0]:.0f}, {self.pos[1]:.0f})"
@@ -895,21 +1135,25 @@ class _Agv:
         moved = self.pos - start
         if moved[0] or moved[1]:
             self.heading = math.atan2(moved[1], moved[0])
+            if forward:
+                self.trail.append(self.pos.copy())
+                del self.trail[:-_TRAIL_POINTS]
         if self.rng is None:
             self.true = self.pos.copy()
         else:
-            a = self.bias + self.walk
+            a = self.bias + self.walk - self.heading_fix
             c, s = math.cos(a), math.sin(a)
             k = 1.0 + self.scale
             self.true = self.true + k * np.array([c * moved[0] - s * moved[1],
                                                   s * moved[0] + c * moved[1]])
+            self.pos_sd += math.hypot(moved[0], moved[1]) * math.sqrt(
+                self.heading_var + p.drift_scale_sd ** 2)
 
-    def in_wall(self) -> bool:
-        """Whether the true position lies in a blocked cell of the global map
-        or off the map."""
-        h, w = self.global_occ.shape
-        x, y = int(round(self.true[0])), int(round(self.true[1]))
-        return not (0 <= x < w and 0 <= y < h) or bool(self.global_occ[y, x])
+    def hit_wall(self, before: np.ndarray) -> bool:
+        """Whether the true motion of the last step, ``before`` -> ``true``
+        (a straight chord: :meth:`move` turns the whole step at once), touches
+        a blocked cell's closed square or leaves the map."""
+        return not self.wall_tree.segment_free(before, self.true)
 
 
 def simulate(scenario: AgvScenario, *, seed: int | None = None,
@@ -956,13 +1200,16 @@ def simulate(scenario: AgvScenario, *, seed: int | None = None,
         now = obs_traj[:, k]
         dist = np.hypot(now[:, 0] - agv.true[0], now[:, 1] - agv.true[1]) if m else np.zeros(0)
         if m:
-            min_sep = min(min_sep, float(dist.min()))
-            if dist.min() < p.collision_distance:
+            # closest approach during the last step, not only at its end
+            swept = (_swept_distance(obs_traj[:, k - 1] - traj[k - 1], now - agv.true)
+                     if k else dist)
+            min_sep = min(min_sep, float(swept.min()))
+            if swept.min() < p.collision_distance:
                 outcome = Outcome.COLLISION
-                agv.log(t, "collision", f"obstacle {int(dist.argmin())} at distance "
-                                        f"{dist.min():.2f}")
+                agv.log(t, "collision", f"obstacle {int(swept.argmin())} at distance "
+                                        f"{swept.min():.2f}")
                 break
-        if agv.in_wall():
+        if agv.hit_wall(traj[k - 1] if k else agv.true):
             outcome = Outcome.COLLISION
             agv.log(t, "collision", f"static obstacle at ({agv.true[0]:.2f}, "
                                     f"{agv.true[1]:.2f}) (drift)")

@@ -118,22 +118,36 @@ def test_paper_maps_have_mixed_cells_only_in_experiment_1():
 
 
 def test_prediction_kernel_matches_a_python_oracle():
+    """The look-ahead's least separation over the continuous motion from the
+    first step on: an oracle samples every step 2,000 times."""
     rng = np.random.default_rng(0)
     pts = np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]])
     cum = np.array([0.0, 3.0, 7.0])
-    obs = rng.uniform(-2, 6, size=(3, 2))
-    vel = rng.uniform(-1, 1, size=(3, 2))
-    sep, j, k = K.predict_min_separation(pts, cum, K.Motion(0.5, 1.0, 2.0, 0.25, 16), obs, vel)
-    best, bj, bk = math.inf, -1, -1
-    s, v = 0.0, 0.5
-    for step in range(1, 17):
-        v = min(v + 0.5, 1.0)
-        s = min(s + v * 0.25, 7.0)
-        p = np.array([s, 0.0]) if s <= 3 else np.array([3.0, s - 3.0])
-        d = np.hypot(*(p - (obs + vel * step * 0.25)).T)
-        if d.min() < best:
-            best, bj, bk = d.min(), int(d.argmin()), step
-    assert sep == pytest.approx(best) and (j, k) == (bj, bk)
+
+    def agv_at(s):
+        return np.array([s, 0.0]) if s <= 3 else np.array([3.0, s - 3.0])
+
+    for _ in range(20):
+        obs = rng.uniform(-2, 6, size=(3, 2))
+        vel = rng.uniform(-2, 2, size=(3, 2))
+        sep, j, k = K.predict_min_separation(pts, cum, K.Motion(0.5, 1.0, 2.0, 0.25, 16),
+                                             obs, vel)
+        best, bj, bk = math.inf, -1, -1
+        s, v = 0.0, 0.5
+        for step in range(1, 17):
+            v = min(v + 0.5, 1.0)
+            s_new = min(s + v * 0.25, 7.0)
+            # the AGV moves straight from its last step point to this one (a chord)
+            a, b = agv_at(s), agv_at(s_new)
+            f = np.linspace(0.0, 1.0, 2001) if step > 1 else np.ones(1)
+            t = (step - 1 + f) * 0.25
+            p = a + f[:, None] * (b - a)
+            for jj in range(3):
+                d = np.hypot(*(p - (obs[jj] + vel[jj] * t[:, None])).T).min()
+                if d < best:
+                    best, bj, bk = d, jj, step
+            s = s_new
+        assert sep == pytest.approx(best, abs=1e-5) and (j, k) == (bj, bk)
 
 
 def test_obstacle_positions_follow_path_and_start_time():
@@ -273,6 +287,54 @@ def test_eq3_fix_is_exact_without_heading_error():
             assert run.drift_error[k] <= 0.05 * run.params.dt * run.params.v_max + 0.02
 
 
+def test_after_a_check_point_the_agv_returns_to_its_planned_leg():
+    sc = PAPER_SCENARIOS["1"]().with_params(drift=True)
+    for seed in range(4):
+        run = simulate(sc, seed=seed)
+        route = run.planned_route
+        fixes = [e.time for e in run.events if e.kind == "check_point"]
+        assert fixes
+        returned = 0
+        for t in fixes:
+            k = int(np.searchsorted(run.times, t - 1e-9))
+            window = run.believed[k:k + int(round((sc.params.track_lookahead + 1.0)
+                                                  / sc.params.dt)) + 1]
+            off = [min(_point_segment_distance(q, a, b) for a, b in zip(route[:-1], route[1:],
+                                                                        strict=True))
+                   for q in window]
+            returned += min(off) < 1e-6
+        assert returned == len(fixes), seed
+
+
+def _point_segment_distance(q, a, b):
+    d = b - a
+    f = min(1.0, max(0.0, float((q - a) @ d) / float(d @ d)))
+    return float(np.hypot(*(a + f * d - q)))
+
+
+def test_two_corners_give_the_pose_without_the_heading():
+    from subtask_opt.planners.agv.simulation import _two_corner_fix
+
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        pos = rng.uniform(0, 20, 2)
+        heading = rng.uniform(-math.pi, math.pi)
+        marks = pos + rng.uniform(-8, 8, size=(3, 2))
+        rel = marks - pos
+        th = np.array([math.remainder(math.atan2(r[1], r[0]) - heading, math.tau)
+                       for r in rel])
+        seen = [(i, float(th[i]), float(np.hypot(*rel[i]))) for i in range(3)]
+        fix = _two_corner_fix(marks, seen, 1e-3)
+        pairs = [abs(math.sin(th[b] - th[a])) for a in range(3) for b in range(a + 1, 3)]
+        if max(pairs) < math.sin(math.radians(20)):
+            assert fix is None
+            continue
+        est, h, _, err, _ = fix
+        np.testing.assert_allclose(est, pos, atol=1e-7)
+        assert math.remainder(h - heading, math.tau) == pytest.approx(0.0, abs=1e-7)
+        assert err > 0
+
+
 def test_drift_is_seeded():
     sc = PAPER_SCENARIOS["1"]().with_params(drift=True)
     a, b = simulate(sc, seed=7), simulate(sc, seed=7)
@@ -335,6 +397,13 @@ def test_bad_params_and_obstacles():
         AgvParams(horizon_s=float("nan"))
     with pytest.raises(ParameterError, match="sonar_min_m"):
         AgvParams(sonar_min_m=3.0)
+    with pytest.raises(ParameterError, match="pass_distance"):
+        AgvParams(pass_distance=0.5)
+    with pytest.raises(ParameterError, match="pass_distance"):
+        AgvParams(pass_distance=2.0)
+    for name in ("wall_clearance", "back_off", "track_lookahead"):
+        with pytest.raises(ParameterError, match=name):
+            AgvParams(**{name: -0.1})
     with pytest.raises(ParameterError, match="unknown AgvParams"):
         AgvParams.from_dict({"speed": 2})
     with pytest.raises(InputDataError, match="path"):
@@ -380,6 +449,47 @@ def test_obstacle_parked_in_a_corridor_ends_in_timeout_not_collision():
     assert run.outcome == Outcome.TIMEOUT and "blocked" in run.kinds()
     assert run.min_separation >= sc.params.collision_distance
     assert math.isnan(run.delay_s)
+
+
+def test_a_pass_between_two_samples_is_a_collision():
+    """A fast obstacle crosses the AGV half-way through a step: at both samples
+    it is a cell away, in between it runs through the AGV."""
+    world = GridWorld(np.zeros((21, 30), dtype=bool))
+    params = AgvParams(collision_check=False, max_time_s=40.0)
+    free = simulate(AgvScenario("free", world, (1, 10), (28, 10), params=params))
+    k = int(np.searchsorted(free.times, 8.0))
+    x_mid = float(free.trajectory[k:k + 2, 0].mean())
+    t_mid = float(free.times[k:k + 2].mean())
+    ob = MovingObstacle([(x_mid, 0), (x_mid, 20)], speed=8.0, start_time=t_mid - 10 / 8)
+    sc = AgvScenario("fast", world, (1, 10), (28, 10), (ob,), params)
+    at_samples = np.hypot(*(ob.positions(free.times[k:k + 2]) - free.trajectory[k:k + 2]).T)
+    assert at_samples.min() > params.collision_distance
+    run = simulate(sc)
+    assert run.outcome == Outcome.COLLISION and run.time_s == pytest.approx(free.times[k + 1])
+    assert run.min_separation < 0.05
+
+
+def test_backing_off_from_an_obstacle_that_comes_at_the_waiting_agv():
+    """The AGV waits behind an obstacle parked on its route; a second one
+    drives at the spot where it waits. Braking, stopping or speeding up cannot
+    avoid it; backing off along the way it came does."""
+    world = GridWorld(np.zeros((21, 30), dtype=bool))
+    parked = MovingObstacle([(12, 10)])
+    alone = simulate(AgvScenario("parked", world, (1, 10), (28, 10), (parked,),
+                                 AgvParams(max_time_s=60.0)))
+    k = int(np.flatnonzero(alone.speeds[1:] == 0)[0]) + 1
+    x_wait = float(alone.trajectory[k, 0])
+    # reaches the waiting spot 10 s after it starts, while the AGV still waits
+    comes = MovingObstacle([(x_wait, 0), (x_wait, 20)], start_time=float(alone.times[k]) - 3.0)
+    runs = {}
+    for back_off in (0.0, 2.0):
+        sc = AgvScenario("trap", world, (1, 10), (28, 10), (parked, comes),
+                         AgvParams(back_off=back_off, max_time_s=120.0))
+        runs[back_off] = simulate(sc)
+    assert runs[0.0].outcome == Outcome.COLLISION
+    assert runs[2.0].outcome == Outcome.SUCCESS and "back_off" in runs[2.0].kinds()
+    d = runs[2.0].obstacle_positions - runs[2.0].trajectory[None]
+    assert np.hypot(d[..., 0], d[..., 1]).min() >= runs[2.0].params.collision_distance
 
 
 def test_obstacle_parking_on_the_goal_is_a_timeout_not_an_input_error():

@@ -13,6 +13,7 @@ from subtask_opt.planners.agv.navigation import (
     landmarks,
     navigate,
     near_points,
+    room_corners,
     segment_route,
 )
 from subtask_opt.planners.agv.quadtree import WHITE
@@ -155,3 +156,28 @@ def test_navigation_finds_a_route_iff_the_grid_planner_does(case):
     assert route[-1].tolist() == list(goal)
     assert not _crosses_obstacle(occ, route)
     assert all(tree.segment_free(a, b) for a, b in zip(route[:-1], route[1:], strict=True))
+
+
+def test_room_corners_are_the_free_corners_of_the_map():
+    occ = np.zeros((4, 6), dtype=bool)
+    occ[3, 5] = True
+    assert sorted(map(tuple, room_corners(occ))) == [(-0.5, -0.5), (-0.5, 3.5), (5.5, -0.5)]
+
+
+def test_routes_keep_the_wall_clearance():
+    """Every leg of a planned route (near points, rule 3-1 and the one-leaf
+    fallback) keeps more than the clearance from walls, by shapely; without a
+    clearance some routes graze a corner."""
+    from subtask_opt.planners.agv.scenarios import random_agv_scenario
+    from subtask_opt.planners.agv.simulation import AgvParams, plan_route
+    from tests.planners.agv.collision_oracle import wall_clearance
+
+    grazing = 0
+    for seed in range(910_000, 910_040):
+        sc = random_agv_scenario(seed, n_obstacles=0)
+        route = plan_route(sc.world, sc.start, sc.goal, sc.params, states=sc.states)
+        assert wall_clearance(sc.world.occupancy, route) > sc.params.wall_clearance, seed
+        bare = plan_route(sc.world, sc.start, sc.goal, AgvParams(wall_clearance=0.0),
+                          states=sc.states)
+        grazing += wall_clearance(sc.world.occupancy, bare) < sc.params.wall_clearance
+    assert grazing > 0

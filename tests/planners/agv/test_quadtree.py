@@ -196,3 +196,41 @@ def test_the_independent_check_sees_a_crossing():
     occ[1, 1] = True
     assert _crosses_obstacle(occ, np.array([[0.0, 0.0], [2.0, 2.0]]))
     assert not _crosses_obstacle(occ, np.array([[0.0, 0.0], [0.0, 2.0], [2.0, 2.0]]))
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_maps(), st.integers(0, 2**31 - 1), st.floats(0.0, 1.2))
+def test_tree_segment_clearance_is_the_distance_to_the_blocked_area(case, seed, clearance):
+    """With a clearance, a segment is free when its distance (shapely) to the
+    blocked cells' squares and to the outside of the grid exceeds it."""
+    from shapely.geometry import LineString
+
+    from tests.planners.agv.collision_oracle import walls
+
+    occ, _, _ = case
+    tree = decompose(occ)
+    h, w = occ.shape
+    rng = np.random.default_rng(seed)
+    blocked = walls(occ)
+    for _ in range(10):
+        a = rng.uniform(-0.4, [w - 0.6, h - 0.6])
+        b = a + rng.normal(0.0, 2.0, 2) if rng.random() < 0.5 else rng.uniform(
+            -0.4, [w - 0.6, h - 0.6])
+        seg = LineString([a, b]) if not np.array_equal(a, b) else LineString([a, a + 1e-9])
+        gap = 0.0 if seg.intersects(blocked) else seg.distance(blocked)
+        if abs(gap - clearance) < 1e-9:
+            continue  # a tie, decided by rounding either way
+        assert tree.segment_free(a, b, clearance) == (gap > clearance), (a, b, gap)
+
+
+def test_tree_segment_clearance_by_hand():
+    occ = np.zeros((5, 5), dtype=bool)
+    occ[2, 2] = True  # square [1.5, 2.5]^2
+    tree = decompose(occ)
+    assert tree.segment_free((0, 1), (4, 1), 0.49)  # half a cell from its face
+    assert not tree.segment_free((0, 1), (4, 1), 0.5)
+    # past the corner (1.5, 1.5) at distance sqrt(0.5): along x + y = 2, closest at (1, 1)
+    assert tree.segment_free((0.4, 1.6), (1.6, 0.4), 0.70)
+    assert not tree.segment_free((0.4, 1.6), (1.6, 0.4), 0.71)
+    assert tree.segment_free((0.4, 3), (0.4, 2), 0.89)  # the border at x = -0.5
+    assert not tree.segment_free((0.4, 3), (0.4, 2), 0.9)
