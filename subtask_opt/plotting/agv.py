@@ -17,10 +17,12 @@ if TYPE_CHECKING:
 
 _OBSTACLE_COLOURS = ("C3", "C1", "C4", "C5", "C6", "C8")
 _EVENT_MARKERS = {"brake": ("v", "C3"), "wait": ("s", "C3"), "speed_up": ("^", "C2"),
+                  "back_off": ("<", "C1"),
                   "sidestep": ("D", "C1"), "static": ("X", "k"), "replan": ("P", "C4"),
                   "recovery": ("*", "C2"), "check_point": ("+", "C9"), "blocked": ("x", "k"),
                   "collision": ("X", "r")}
 _EVENT_LABELS = {"brake": "brake / stop", "wait": "wait", "speed_up": "speed up",
+                 "back_off": "back off",
                  "sidestep": "sidestep", "static": "obstacle taken as static",
                  "replan": "re-plan", "recovery": "route recovered",
                  "check_point": "check point (eq. 3)", "blocked": "blocked",
