@@ -108,7 +108,7 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
         for visit, i in enumerate(o):
             ax.text(*pts[i], f" {visit + 1}", fontsize=7, color="#1b4332")
     ax.scatter(*path[0], marker="*", s=140, color="#c92a2a", depthshade=False,
-               label="tool at home (start and end)")
+               label="tool at home (start and end)" if closed else "tool at home (start)")
     if q_home is not None:
         from subtask_opt.plotting.arm3d import skeleton_points
 
