@@ -38,31 +38,33 @@ def _strip(value: object) -> object:
     return value
 
 
-def _grid() -> list[list[str]]:
-    import subtask_opt.planners.grid  # noqa: F401  (registers the family)
-
+def _family(family: str, places: dict[bool, tuple[list[str], ...]], seed: str,
+            iterations: list[str]) -> list[list[str]]:
+    """One command per planner of ``family`` and place (``places[stochastic]``: the
+    arguments that say where), seeded when stochastic, shortened when iterative."""
     out = []
-    for name, info in planners("grid").items():
-        for world in ("open", "blocks") if info.stochastic else ("open",):
-            argv = ["plan", "grid", "--map", world, "--planner", name]
+    for name, info in planners(family).items():
+        for where in places[info.stochastic]:
+            argv = ["plan", family, *where, "--planner", name]
             if info.stochastic:
-                argv += ["--seed", "5"]
+                argv += ["--seed", seed]
             if info.iterative:
-                argv += ["--generations", "40"]
+                argv += iterations
             out.append(argv)
     return out
 
 
+def _grid() -> list[list[str]]:
+    import subtask_opt.planners.grid  # noqa: F401  (registers the family)
+
+    maps = (["--map", "open"],)
+    return _family("grid", {False: maps, True: (*maps, ["--map", "blocks"])}, "5",
+                   ["--generations", "40"])
+
+
 def _polygon_commands() -> list[list[str]]:
-    out = []
-    for name, info in planners("polygon").items():
-        argv = ["plan", "polygon", "--start", "20,20", "--goal", "320,320", "--planner", name]
-        if info.stochastic:
-            argv += ["--seed", "2"]
-        if info.iterative:
-            argv += ["--iterations", "60"]
-        out.append(argv)
-    return out
+    ends = (["--start", "20,20", "--goal", "320,320"],)
+    return _family("polygon", {False: ends, True: ends}, "2", ["--iterations", "60"])
 
 
 def _reactive() -> list[list[str]]:

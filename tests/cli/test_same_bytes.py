@@ -11,12 +11,15 @@ import os
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from tests.conftest import REDUCED
 
-TIMING = re.compile(r"(runtime|seconds|_ms$|^time_s$|compile|elapsed|wall)", re.IGNORECASE)
+TIMING = re.compile(r"(runtime|seconds|_ms$|^time_s$|compile|elapsed|wall|^cpu)",
+                    re.IGNORECASE)
+DATA = Path(__file__).resolve().parents[2] / "examples" / "data"
 
 COMMANDS = {
     "solve": ["solve", "--case", "random30", "--seed", "3"],
@@ -24,6 +27,9 @@ COMMANDS = {
     "plan polygon pso": ["plan", "polygon", "--start", "20,20", "--goal", "320,320",
                          "--planner", "pso", "--seed", "2"],
     "tsp": ["tsp", "TSP", "--seed", "1"],
+    "solve ur5": ["solve", "--robot", "ur5", "--case", str(DATA / "ur5_panel.csv"), "--scene",
+                  str(DATA / "ur5_panel_scene.json"), "--home", "0,-90,90,-90,-90,0",
+                  "--tour", "open", "--precedence", "PRECEDENCE", "--seed", "3"],
 }
 
 
@@ -45,7 +51,10 @@ def test_json_is_identical_across_processes(name, tmp_path):
     coords = "".join(f"{i + 1} {37 * (i * 7 % 13)} {53 * (i * 5 % 11)}\n" for i in range(20))
     tsp.write_text("NAME: ring\nTYPE: TSP\nDIMENSION: 20\nEDGE_WEIGHT_TYPE: EUC_2D\n"
                    f"NODE_COORD_SECTION\n{coords}EOF\n")
-    argv = [str(tsp) if a == "TSP" else a for a in COMMANDS[name]]
+    precedence = tmp_path / "before.txt"
+    precedence.write_text("4,1\n7,2\n")
+    argv = [str(tsp) if a == "TSP" else str(precedence) if a == "PRECEDENCE" else a
+            for a in COMMANDS[name]]
     outputs = []
     for hash_seed in ("1", "2"):
         out = tmp_path / f"{hash_seed}.json"

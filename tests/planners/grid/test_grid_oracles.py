@@ -44,6 +44,12 @@ def los_free(occ: np.ndarray, a, b) -> bool:
     ys, xs = np.nonzero(occ)
     if xs.size == 0:
         return True
+    return not _meets_squares(xs, ys, a, b, closed=True)
+
+
+def _meets_squares(xs, ys, a, b, *, closed: bool) -> bool:
+    """Whether the segment a -> b meets any of the unit squares centred at (xs, ys):
+    their closed squares, or (``closed=False``) their open ones (Liang-Barsky)."""
     p0 = np.asarray(a, dtype=float)
     d = np.asarray(b, dtype=float) - p0
     t0 = np.zeros(xs.size)
@@ -52,13 +58,14 @@ def los_free(occ: np.ndarray, a, b) -> bool:
     for axis, c in ((0, xs), (1, ys)):
         lo, hi = c - 0.5, c + 0.5
         if d[axis] == 0:
-            inside &= (p0[axis] >= lo) & (p0[axis] <= hi)
+            inside &= ((p0[axis] >= lo) & (p0[axis] <= hi) if closed
+                       else (p0[axis] > lo) & (p0[axis] < hi))
             continue
         ta = (lo - p0[axis]) / d[axis]
         tb = (hi - p0[axis]) / d[axis]
         t0 = np.maximum(t0, np.minimum(ta, tb))
         t1 = np.minimum(t1, np.maximum(ta, tb))
-    return not np.any(inside & (t0 <= t1))
+    return bool(np.any(inside & ((t0 <= t1) if closed else (t0 < t1))))
 
 
 def los_free_thesis(occ: np.ndarray, a, b) -> bool:
@@ -71,21 +78,7 @@ def los_free_thesis(occ: np.ndarray, a, b) -> bool:
     pad[1:-1, 1:-1] = occ
     ys, xs = np.nonzero(pad)
     xs, ys = xs - 1, ys - 1
-    p0 = np.asarray(a, dtype=float)
-    d = np.asarray(b, dtype=float) - p0
-    t0 = np.zeros(xs.size)
-    t1 = np.ones(xs.size)
-    inside = np.ones(xs.size, dtype=bool)
-    for axis, c in ((0, xs), (1, ys)):
-        lo, hi = c - 0.5, c + 0.5
-        if d[axis] == 0:
-            inside &= (p0[axis] > lo) & (p0[axis] < hi)
-            continue
-        ta = (lo - p0[axis]) / d[axis]
-        tb = (hi - p0[axis]) / d[axis]
-        t0 = np.maximum(t0, np.minimum(ta, tb))
-        t1 = np.minimum(t1, np.maximum(ta, tb))
-    if np.any(inside & (t0 < t1)):
+    if _meets_squares(xs, ys, a, b, closed=False):
         return False
     # corner points (x + 1/2, y + 1/2), doubled, where two blocked cells touch diagonally
     corners = [(2 * x + 1, 2 * y + 1) for y in range(-1, h) for x in range(-1, w)
