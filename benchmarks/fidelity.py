@@ -5,7 +5,7 @@ the tour is optimised under each time model - ``paper``, ``trapezoid`` (the
 Cartesian models, one elbow branch), ``line`` and ``joint`` (joint-aware, the
 elbow configuration of each subtask chosen with the order) - and then executed
 as a trajectory that respects the joint limits
-(:func:`subtask_opt.arm.trajectory.tour_trajectory`): the Cartesian models' straight
+(:func:`subtask_opt.arm.trajectory.build_trajectory`): the Cartesian models' straight
 lines are driven as fast as the joint and Cartesian limits allow (a joint move
 where the line is impossible), the joint-aware models exactly as timed. Every
 trajectory is checked by the validator.
@@ -38,7 +38,7 @@ import numpy as np
 from subtask_opt import builtin_case, solve
 from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
-from subtask_opt.arm.trajectory import tour_trajectory, validate_trajectory
+from subtask_opt.arm.trajectory import build_trajectory, validate
 from subtask_opt.base.progress import progress_bar
 
 ROBOTS = ("planar_2r", "asr_twodof")
@@ -62,8 +62,8 @@ def run_instance(robot: str, case: str, instance: int, seed: int, arm) -> list[d
         problem = PlanarProblem(subtasks, arm, time_model=model,
                                 configurations=configurations)
         result = solve(problem, seed=seed)
-        trajectory = tour_trajectory(problem, result)
-        report = validate_trajectory(trajectory, dt=2e-3)
+        trajectory = build_trajectory(result)
+        report = validate(trajectory, dt=2e-3)
         row = {
             "robot": robot, "case": case, "instance": instance, "model": model,
             "predicted_s": result.total_time, "executed_s": trajectory.duration,

@@ -1,6 +1,6 @@
 """RoboTSP's drilling benchmark: ours beside RoboTSP's method, TSP C-space and LKH's GTSP.
 
-Runs :func:`subtask_opt.arm.robotsp_bench.run` on ``../shared/data/robotsp``
+Runs :func:`subtask_opt.papers.robotsp.run` on ``../shared/data/robotsp``
 (every subset, or ``--sizes 25,50``) and prints the table. The peers come from
 ``subtask_opt.tour.peers``; while that module is missing, ``--stand-in`` runs
 a minimal re-implementation of RoboTSP's method written here (Euclidean 2-opt
@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from subtask_opt.arm.robotsp_bench import run, table
 from subtask_opt.base.errors import SubtaskOptError
+from subtask_opt.papers.robotsp import run, table
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "robotsp"
 

@@ -19,6 +19,7 @@ from subtask_opt import _kernel_cache  # noqa: F401  (first: selects numba's cac
 from subtask_opt.arm.planar_problem import DEFAULT_TIME_MODEL
 from subtask_opt.arm.problem import (
     ArmProblem,
+    Joints,
     Robot,
     load_robot,
     load_targets,
@@ -46,7 +47,7 @@ from subtask_opt.tour.solve import PRESETS, Result, SolverParams
 __version__ = "0.1.0"
 
 __all__ = [
-    "load_robot", "Robot", "load_targets", "ArmProblem", "solve", "Result", "trajectory",
+    "load_robot", "Robot", "load_targets", "ArmProblem", "Joints", "solve", "Result", "trajectory",
     "validate", "TourConstraints", "SolverParams", "PRESETS", "DEFAULT_TIME_MODEL",
     "TIME_MODELS", "TourReport",
     "SubtaskSet", "builtin_case", "save_subtasks", "CASE_NAMES",

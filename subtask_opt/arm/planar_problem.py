@@ -194,13 +194,14 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
           stop: StoppingCriterion | list[StoppingCriterion] | None = None,
           params: SolverParams | None = None, progress: bool = False,
           certify: bool = False, certify_time_limit: float = 60.0,
-          constraints: TourConstraints | None = None) -> Result:
+          constraints: TourConstraints | None = None, home_branch: int | None = None) -> Result:
     """Find a minimum-time tour through the problem's subtasks (or nodes).
 
     A tour problem goes to :func:`subtask_opt.tour.solve.solve` as it is (see there for
     the arguments). An arm problem is compiled first: a home point (``constraints.home
     = (x, y)``) becomes one more subtask, checked reachable, that the tour starts and
-    ends at; the answer then gets the arm's report of its tour (the elbows chosen in
+    ends at (``home_branch``: in that elbow configuration, a home given as joint
+    values); the answer then gets the arm's report of its tour (the elbows chosen in
     ``report.configurations``), and its ``configurations`` are the (N, 2) joint angles
     of every subtask (input order, the home left out).
     """
@@ -212,7 +213,7 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
     constraints.check_size(problem.size, matrix_home=False)
     shaped, searched = constraints, problem
     if constraints.home is not None:
-        searched = _with_home(problem, constraints.home)  # type: ignore[arg-type]
+        searched = _with_home(problem, constraints.home, home_branch)  # type: ignore[arg-type]
         shaped = replace(constraints, home=searched.size - 1)
     try:
         result = solve_tour(searched.tour_problem, seed=seed, stop=stop, params=params,
@@ -225,8 +226,7 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
                else np.asarray(searched.timing.configurations))
     tour = (np.concatenate([[searched.size - 1], result.order]) if shaped.home is not None
             else result.order)
-    cyclic = result.matrix[tour, np.roll(tour, -1)]
-    report = tour_report(searched, tour, configs, cyclic)
+    report = tour_report(searched, tour, configs, result.leg_times)
     timing = searched.timing
     if timing.branch_joints is None:
         joints = np.asarray(timing.joint_positions)[:problem.size]
@@ -235,8 +235,10 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
     return replace(result, report=report, constraints=constraints, configurations=joints)
 
 
-def _with_home(problem: PlanarProblem, home: tuple[float, float]) -> PlanarProblem:
-    """``problem`` with the home point appended as the last subtask (checked reachable)."""
+def _with_home(problem: PlanarProblem, home: tuple[float, float],
+               branch: int | None = None) -> PlanarProblem:
+    """``problem`` with the home point appended as the last subtask (checked reachable),
+    visited on elbow ``branch`` when one is given."""
     import dataclasses
 
     from subtask_opt.arm.tasks import DUPLICATE_TOL, SubtaskSet
@@ -259,6 +261,33 @@ def _with_home(problem: PlanarProblem, home: tuple[float, float]) -> PlanarProbl
     subtasks = SubtaskSet(np.vstack([pts, xy]),
                           None if theta is None else np.append(theta, 0.0),
                           problem.subtasks.name)
-    return dataclasses.replace(problem, subtasks=subtasks, first=None)
+    searched = dataclasses.replace(problem, subtasks=subtasks, first=None)
+    if branch is not None:
+        _pin_branch(searched, searched.size - 1, branch)
+    return searched
+
+
+def _pin_branch(problem: PlanarProblem, node: int, branch: int) -> None:
+    """Visit ``node`` of a just-built problem on elbow ``branch`` only."""
+    letters = "du"
+    tour = problem.tour_problem
+    if not isinstance(tour, ClusteredProblem):
+        fixed = int(np.asarray(problem.timing.configurations)[node])
+        if fixed != branch:
+            names = ("down", "up")
+            raise ParameterError(
+                f"the home configuration is elbow {names[branch]} ({letters[branch]}), but "
+                f"this problem visits it elbow {names[fixed]} with fixed configurations: "
+                f"use elbow={branch} or configurations='optimize'")
+        return
+    costs = np.array(tour.costs)
+    costs[node, 1 - branch] = np.inf
+    costs[:, :, node, 1 - branch] = np.inf
+    present = np.array(tour.present)
+    present[node, 1 - branch] = False
+    if not present[node, branch]:
+        raise InputDataError(f"the home configuration's elbow branch ({letters[branch]}) "
+                             "cannot reach the home point")
+    object.__setattr__(problem, "_tour", ClusteredProblem(costs, present=present))
 
 

@@ -207,6 +207,28 @@ def _planar_file(path: Path) -> bool:
     return True
 
 
+@dataclass(frozen=True)
+class Joints:
+    """A home given as joint values (radians): a configuration of any arm.
+
+    ``ArmProblem(home=Joints([q1, q2]))`` starts a planar arm's tour in that
+    configuration (its tip point and elbow); a serial arm's home is a configuration
+    anyway (``home=[q1, ..., qn]`` means the same).
+    """
+
+    values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        try:
+            q = np.asarray(self.values, dtype=float).ravel()
+        except (TypeError, ValueError):
+            q = np.full(1, np.nan)
+        if q.size == 0 or not np.all(np.isfinite(q)):
+            raise ParameterError(f"Joints needs finite joint values (radians), got "
+                                 f"{self.values!r}")
+        object.__setattr__(self, "values", tuple(float(v) for v in q))
+
+
 PLANAR_ONLY = ("time_model", "k", "elbow", "configurations", "line_fallback",
                "check_all_legs")
 SERIAL_ONLY = ("scene", "clearance", "ik_seed")
@@ -221,9 +243,10 @@ class ArmProblem:
             :func:`~subtask_opt.arm.tasks.builtin_case`) for a planar arm; pose targets for
             a serial arm.
         robot: the robot (:func:`load_robot`).
-        home: a serial arm's home configuration (radians; default the robot file's
-            ``home_deg``); for a planar arm a home *point* ``(x, y)`` visited first and
-            last (default: none, the tour starts at a subtask).
+        home: where the tour starts and (closed) ends. Any arm: a configuration,
+            :class:`Joints` (radians); a serial arm's home is also a plain sequence of
+            joint values (default the robot file's ``home_deg``); a planar arm's a plain
+            *point* ``(x, y)`` (default: none, the tour starts at a subtask).
         scene: (serial arms) a scene file or :class:`~subtask_opt.arm.scene.Scene`.
         time_model: ``joint`` (every robot); ``line``, ``trapezoid``, ``paper``
             (planar arms: Cartesian models).
@@ -251,6 +274,10 @@ class ArmProblem:
     ik_seed: int = 0
     first: int | None = None
     compiled: Any = field(init=False, repr=False)
+    # a planar home as the compiled problem takes it: the tip point and, for a home
+    # configuration, its elbow branch (None: a point, either elbow)
+    _planar_home: tuple[tuple[float, float], int | None] | None = field(
+        init=False, repr=False, default=None)
 
     def __post_init__(self) -> None:
         if not isinstance(self.robot, Robot):
@@ -277,14 +304,18 @@ class ArmProblem:
 
         _check_targets(self.targets, SubtaskSet, self.robot, "planar points (load_targets "
                        "of an x,y file)")
-        if self.home is not None:
+        if isinstance(self.home, Joints):
+            object.__setattr__(self, "_planar_home", _planar_home_configuration(
+                self.robot.model, np.array(self.home.values)))
+        elif self.home is not None:
             try:
                 home = np.asarray(self.home, dtype=float)
             except (TypeError, ValueError):
                 home = np.zeros(0)
             if home.shape != (2,) or not np.all(np.isfinite(home)):
-                raise ParameterError(f"a planar arm's home is a point (x, y) in metres, got "
-                                     f"{self.home!r}")
+                raise ParameterError(f"a planar arm's home is a point (x, y) in metres or "
+                                     f"a configuration Joints([q1, q2]), got {self.home!r}")
+            object.__setattr__(self, "_planar_home", ((float(home[0]), float(home[1])), None))
         return PlanarProblem(self.targets, self.robot.model, time_model=self.time_model,
                              first=self.first, k=self.k, elbow=self.elbow,
                              configurations=self.configurations,
@@ -302,7 +333,7 @@ class ArmProblem:
             raise ParameterError("ArmProblem.first applies to planar arms; a serial arm's "
                                  "tour starts at its home (TourConstraints(start=I) for the "
                                  "first target)")
-        home = self.home
+        home = self.home.values if isinstance(self.home, Joints) else self.home
         if home is None:
             home = default_home(self.robot.model)
             if home is None:
@@ -318,6 +349,28 @@ class ArmProblem:
     def size(self) -> int:
         """Number of targets."""
         return int(self.compiled.size)
+
+
+def _planar_home_configuration(arm: Any, q: np.ndarray) -> tuple[tuple[float, float], int]:
+    """A planar home configuration as (tip point, elbow branch), checked to be the arm's
+    IK solution of that point on that branch (inside the joint limits)."""
+    lim = arm.joint_limits
+    if q.shape != (2,):
+        raise ParameterError(f"a planar arm's home configuration has 2 joint values, got "
+                             f"{q.size}")
+    if np.any(q < lim.lower) or np.any(q > lim.upper):
+        raise InputDataError(f"home configuration {np.round(q, 6).tolist()} rad is outside "
+                             f"the joint limits [{lim.lower.tolist()}, {lim.upper.tolist()}]")
+    point = np.asarray(arm.fk(q), dtype=float)[:2]
+    branches = arm.ik(point)
+    miss = np.abs(np.angle(np.exp(1j * (branches - q)))).max(axis=1)
+    miss[~np.isfinite(miss)] = np.inf
+    branch = int(np.argmin(miss))
+    if miss[branch] > 1e-6:
+        raise InputDataError(f"home configuration {np.round(q, 6).tolist()} rad is on "
+                             "neither elbow branch of the arm's IK (a singular or wrapped "
+                             "configuration)")
+    return (float(point[0]), float(point[1])), branch
 
 
 def _check_targets(targets: Any, kind: type, robot: Robot, what: str) -> None:
@@ -367,51 +420,36 @@ def solve(problem: ArmProblem | MatrixProblem | ClusteredProblem | Any, *, seed:
                                     progress=progress, certify=certify,
                                     certify_time_limit=certify_time_limit,
                                     constraints=constraints)
-    if problem.home is not None:
+    branch = None
+    if problem._planar_home is not None:
         if constraints is not None and constraints.home is not None:
             raise ParameterError("give the home once: ArmProblem(home=...) or "
                                  "TourConstraints(home=...), not both")
-        home = (float(problem.home[0]), float(problem.home[1]))
-        constraints = replace(constraints or TourConstraints(), home=home)
+        point, branch = problem._planar_home
+        constraints = replace(constraints or TourConstraints(), home=point)
     return planar_problem.solve(problem.compiled, seed=seed, stop=stop, params=params,
                                 progress=progress, certify=certify,
-                                certify_time_limit=certify_time_limit, constraints=constraints)
+                                certify_time_limit=certify_time_limit, constraints=constraints,
+                                home_branch=branch)
 
 
-def trajectory(result: Result, *, dt: float = 0.01) -> Any:
-    """The executable joint trajectory of an arm problem's answer (ruckig legs; for a
-    planar arm's Cartesian models the straight lines time-parameterised)."""
-    from subtask_opt.arm.report import TourReport
-    from subtask_opt.arm.serial_problem import SerialReport
+def trajectory(result: Result) -> Any:
+    """The executable joint trajectory of an arm problem's answer
+    (:func:`~subtask_opt.arm.trajectory.build_trajectory`): ruckig joint moves, and a
+    planar arm's straight lines time-parameterised as its time model timed them."""
+    from subtask_opt.arm.trajectory import build_trajectory
 
-    report = getattr(result, "report", None)
-    if isinstance(report, SerialReport):
-        from subtask_opt.arm.serial_trajectory import serial_trajectory
-
-        return serial_trajectory(report.problem, report)
-    if isinstance(report, TourReport):
-        from subtask_opt.arm.trajectory import tour_trajectory
-
-        return tour_trajectory(report.problem, result)
-    raise ParameterError("trajectory needs the Result of an arm problem (solve(ArmProblem))")
+    return build_trajectory(result)
 
 
 def validate(trajectory: Any, *, dt: float | None = None) -> Any:
-    """Check a :func:`trajectory` densely: joint limits (jerk included), rest at the
-    targets, collisions and FK (serial arms), duration against the planned total."""
-    from subtask_opt.arm.serial_trajectory import SerialTrajectory, validate_serial_trajectory
-    from subtask_opt.arm.trajectory import TourTrajectory, validate_trajectory
+    """Check a :func:`trajectory` densely (:func:`~subtask_opt.arm.trajectory.validate`):
+    joint limits (jerk included), rest at the stops, FK at every target, the duration
+    against the planned time, and collisions where the problem has a checker."""
+    from subtask_opt.arm.trajectory import validate as check
 
-    if isinstance(trajectory, SerialTrajectory):
-        if trajectory.result is None:
-            raise ParameterError("validate needs a trajectory from subtask_opt.trajectory")
-        return validate_serial_trajectory(trajectory, trajectory.result,
-                                          dt=0.005 if dt is None else dt)
-    if isinstance(trajectory, TourTrajectory):
-        return validate_trajectory(trajectory, dt=1e-3 if dt is None else dt)
-    raise ParameterError(f"validate needs a trajectory from subtask_opt.trajectory, got "
-                         f"{type(trajectory).__name__}")
+    return check(trajectory, dt=dt)
 
 
-__all__ = ["ArmProblem", "Robot", "load_robot", "load_targets", "movable_joints", "solve",
+__all__ = ["ArmProblem", "Joints", "Robot", "load_robot", "load_targets", "movable_joints", "solve",
            "trajectory", "validate"]

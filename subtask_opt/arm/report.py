@@ -134,17 +134,20 @@ class TourReport:
 
 def tour_report(problem: PlanarProblem, order: np.ndarray, configurations: np.ndarray,
                 leg_times: np.ndarray) -> TourReport:
-    """The report of the closed tour ``order`` at ``configurations`` (by subtask index)."""
+    """The report of the tour ``order`` at ``configurations`` (by subtask index): its
+    ``len(leg_times)`` legs, ``order[k] -> order[k + 1]`` (a closed tour's last one back
+    to ``order[0]``; an open path has one leg fewer)."""
     timing = problem.timing
     check = timing.leg_check
     points = problem.subtasks.points
     moves = timing.moves(configurations)
-    n = len(order)
+    starts = np.asarray(order)[:len(leg_times)]
+    ends = np.roll(order, -1)[:len(leg_times)]
     if check is not None:  # the tour's legs only; all pairs when the problem asks
-        outside, ratio = check.legs(order, np.roll(order, -1))
+        outside, ratio = check.legs(starts, ends)
     legs = []
-    for i in range(n):
-        a, b = int(order[i]), int(order[(i + 1) % n])
+    for i in range(len(leg_times)):
+        a, b = int(starts[i]), int(ends[i])
         ca, cb = int(configurations[a]), int(configurations[b])
         notes: list[str] = []
         infeasible = False

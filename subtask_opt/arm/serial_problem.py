@@ -33,7 +33,6 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -857,44 +856,5 @@ def default_home(arm: SerialArm) -> np.ndarray | None:
     return np.radians(np.asarray(home, dtype=np.float64))
 
 
-def serial_problem_from_files(robot: str, case: str | Path, *, scene: str | Path | None = None,
-                              home_deg: Any = None, standoff: float = 0.0,
-                              axis_step: float = 45.0, tool_frame: str | None = None,
-                              limits: Any = None, clearance: float = 0.01) -> SerialProblem:
-    """A :class:`SerialProblem` from a robot name or URDF, a target file and a scene file.
-
-    ``home_deg`` (degrees) defaults to the robot file's ``home_deg``; ``limits`` is a
-    limit-set name or a JSON file of per-joint arrays (see
-    :func:`~subtask_opt.arm.serial.load_serial_arm`).
-    """
-    import json
-
-    from subtask_opt.arm.poses import load_targets
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import load_serial_arm
-
-    lim: Any = limits
-    if isinstance(limits, (str, Path)) and str(limits).lower().endswith(".json"):
-        try:
-            lim = json.loads(Path(limits).read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise InputDataError(f"cannot read the limits file {limits}: {exc}") from None
-    arm = load_serial_arm(robot, tool_frame=tool_frame, limits=lim)
-    targets = load_targets(case, axis_step=axis_step, standoff=standoff)
-    if home_deg is None:
-        home = default_home(arm)
-        if home is None:
-            raise ParameterError(f"{arm.name} has no default home: give --home q1,...,q{arm.nq} "
-                                 "in degrees")
-    else:
-        home = np.radians(np.asarray(home_deg, dtype=np.float64))
-        if home.shape != (arm.nq,):
-            raise ParameterError(f"home must have {arm.nq} joint values for {arm.name}, got "
-                                 f"{len(home)}")
-    box_scene = Scene.load(scene) if scene is not None else None
-    return SerialProblem(targets, arm, home, scene=box_scene, clearance=clearance)
-
-
 __all__ = ["MAX_CONFIGURATIONS", "SerialProblem", "SerialReport", "default_home",
-           "evaluate_tour",
-           "serial_problem_from_files", "solve_serial_problem"]
+           "evaluate_tour", "solve_serial_problem"]

@@ -1,59 +1,49 @@
-"""Executable joint trajectories of a solved tour, and a validator.
+"""The executable joint trajectory of a solved tour, for every robot, and one validator.
 
-:func:`tour_trajectory` turns a :class:`~subtask_opt.arm.planar_problem.Result` into a
-time-parameterised joint trajectory of the closed tour, rest to rest at every
-subtask:
+:func:`build_trajectory` (``subtask_opt.trajectory``) turns the
+:class:`~subtask_opt.tour.solve.Result` of an arm problem into a :class:`Trajectory`:
+rest-to-rest legs through the stops of the tour (the home first and, for a closed tour,
+last; open tours end at their last target), each a :class:`Leg` of
 
-* a joint move is ruckig's time-optimal synchronised trajectory (offline API:
-  ``Ruckig(2)``, ``InputParameter``, ``Trajectory``, ``calculate``), jerk-limited
-  when the arm has jerk limits;
-* a straight-line leg is the time-optimal parameterisation of the line under
-  the joint and Cartesian limits (:mod:`subtask_opt.arm.timing._line_kernels`).
+* a joint move: ruckig's time-optimal synchronised profile, jerk-limited when the arm
+  has jerk limits. A planar arm's joints are time-synchronised (each joint its own
+  profile, all ending together: the ``joint`` model's leg time); a serial arm's are also
+  phase-synchronised (the straight joint-space line its collision checker swept:
+  :class:`~subtask_opt.arm.timing.joint_legs.StraightLeg`);
+* (planar arms) a straight line: the time-optimal parameterisation of the line under the
+  joint and Cartesian limits (:mod:`subtask_opt.arm.timing._line_kernels`), jerk-limited
+  like the ``line`` time model times it.
 
-Tours of the ``joint`` and ``line`` models are executed as they were timed, so
-the trajectory's duration is the predicted tour time. Tours of the Cartesian
-models (``paper``, ``trapezoid``) promise straight lines at Cartesian limits
-the arm may not manage: they are executed as the ``line`` model would drive
-the same legs (a joint move where the line is impossible), so the duration is
-what the arm really needs, and :attr:`TourTrajectory.predicted_time` keeps
-what the model promised.
+Tours of the ``joint`` and ``line`` models are executed as they were timed, so the
+duration is the planned time (:attr:`Trajectory.predicted_time`). A planar arm's
+Cartesian models (``paper``, ``trapezoid``) promise straight lines at Cartesian limits
+the arm may not manage: they are executed as the ``line`` model would drive the same
+legs (a joint move where the line is impossible), so the duration is what the arm
+really needs and ``predicted_time`` what the model promised.
 
-When the arm has joint jerk limits every leg honours them: joint moves are
-ruckig's jerk-limited profiles, and a straight line is the time-optimal
-acceleration-limited profile averaged over a window (which makes its
-acceleration continuous) and slowed down uniformly until the velocity,
-acceleration and jerk limits hold
-(:func:`subtask_opt.arm.timing._line_kernels.line_profile`); the ``line``
-time model times the legs the same way, so the executed duration is the
-predicted one. Without jerk limits (``asr_twodof``) lines are
-acceleration-limited and joint moves trapezoids.
+:func:`validate` samples a trajectory densely and checks, for every robot: joint
+positions, velocities, accelerations and (with jerk limits) jerk against the limits,
+rest at every stop, that every stop's configuration reaches its target (FK), the
+duration against the planned time (models the arm executes as timed), and collisions
+with the scene and the arm itself at every sample where the problem has a checker.
 
-:func:`validate_trajectory` samples a trajectory densely and reports every
-joint position, velocity, acceleration or jerk limit it exceeds.
-
-Sampling steps: ``dt`` of :meth:`TourTrajectory.sample`, :meth:`TourTrajectory.to_csv`
-and :func:`validate_trajectory` must lie in [:data:`MIN_DT`, :data:`MAX_DT`] s
-and give at most :data:`MAX_SAMPLES` samples; the count is estimated before
-anything is allocated.
+Sampling steps must lie in [:data:`MIN_DT`, :data:`MAX_DT`] s and give at most
+:data:`MAX_SAMPLES` samples; the count is estimated before anything is allocated.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from subtask_opt.arm import _kinematics_kernels as _k
 from subtask_opt.arm.timing import _line_kernels as _lk
 from subtask_opt.base.errors import InputDataError, ParameterError, require_positive
-
-if TYPE_CHECKING:
-    from subtask_opt.arm.model import Arm
-    from subtask_opt.arm.planar_problem import PlanarProblem
-    from subtask_opt.tour.solve import Result
 
 # Relative slack of the validator on velocity and acceleration limits: the line
 # legs meet their limits exactly at the grid points of the path and to
@@ -70,96 +60,140 @@ DEFAULT_JTOL = 1e-3
 MIN_DT = 1e-6
 MAX_DT = 10.0
 MAX_SAMPLES = 10_000_000
+# How far a stop's configuration may miss its target (m; rad between tool axes).
+FK_POSITION_TOL = 1e-5
+FK_AXIS_TOL = 1e-4
+# Largest |executed - planned| / planned for the models the arm executes as timed.
+DURATION_RTOL = 0.005
+HOME = -1
+"""The stop index of a home (a serial arm's home configuration, a planar home point)."""
 
-CSV_HEADER = "t,q1,q2,dq1,dq2,x,y"
+States = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
 @dataclass(frozen=True, eq=False)
 class Leg:
-    """One rest-to-rest move of a tour trajectory.
+    """One rest-to-rest move of a trajectory.
 
     Attributes:
         start: time the leg starts (s) within the tour.
         duration: its duration (s).
-        kind: ``"joint"`` (ruckig) or ``"line"`` (straight line).
-        from_subtask, to_subtask: subtask indices.
-        from_config, to_config: elbow branches at both ends (0 down, 1 up).
-        q_from, q_to: (2,) joint positions at both ends.
+        kind: ``"joint"`` (ruckig) or ``"line"`` (a planar straight line).
+        from_stop, to_stop: target indices (:data:`HOME` for a home).
+        from_config, to_config: the configurations at both ends (a planar arm's elbow
+            branch, 0 down and 1 up; a serial arm's index among the target's IK
+            solutions; 0 at a home).
+        q_from, q_to: (n,) joint positions at both ends.
     """
 
     start: float
     duration: float
     kind: str
-    from_subtask: int
-    to_subtask: int
+    from_stop: int
+    to_stop: int
     from_config: int
     to_config: int
     q_from: np.ndarray
     q_to: np.ndarray
-    _eval: Any = field(repr=False, default=None)
+    _eval: Callable[[np.ndarray], States] = field(repr=False)
 
-    def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, qd, qdd), each (T, 2), at leg-local times t (clamped to [0, duration])."""
+    def states(self, t: np.ndarray) -> States:
+        """(q, qd, qdd), each (T, n), at leg-local times t (clamped to [0, duration])."""
         return self._eval(np.clip(np.asarray(t, dtype=np.float64), 0.0, self.duration))
 
 
 @dataclass(frozen=True, eq=False)
 class TrajectorySamples:
-    """A trajectory sampled at a fixed step: times (T,), joints (T, 2), tip (T, 2)."""
+    """A trajectory sampled at a fixed step: times (T,), joints (T, n), tool (T, 2 or 3)."""
 
     t: np.ndarray
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
-    xy: np.ndarray
+    tool: np.ndarray
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write ``t,q1,q2,dq1,dq2,x,y`` rows (SI units: s, rad, rad/s, m)."""
+        """Write ``t,q1..qn,dq1..dqn,x,y[,z]`` rows (SI units: s, rad, rad/s, m)."""
+        n = self.q.shape[1]
+        header = ",".join(["t"] + [f"q{j + 1}" for j in range(n)]
+                          + [f"dq{j + 1}" for j in range(n)] + list("xyz"[:self.tool.shape[1]]))
         path = Path(path)
-        table = np.column_stack([self.t, self.q, self.qd, self.xy])
+        table = np.column_stack([self.t, self.q, self.qd, self.tool])
         try:
-            np.savetxt(path, table, delimiter=",", header=CSV_HEADER, comments="", fmt="%.10g")
+            np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.10g")
         except OSError as exc:
             raise InputDataError(f"cannot write trajectory CSV {path}: {exc}") from None
         return path
 
 
-class TourTrajectory:
-    """The time-parameterised joint trajectory of a closed tour.
+@dataclass(frozen=True)
+class Limits:
+    """The joint limits a trajectory is judged by, (n,) arrays (jerk None: not limited)."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+    jerk: np.ndarray | None
+
+
+def arm_limits(arm: Any) -> Limits:
+    """The joint limits of a planar :class:`~subtask_opt.arm.model.Arm` or a
+    :class:`~subtask_opt.arm.serial.SerialArm` (which then needs acceleration limits)."""
+    if hasattr(arm, "joint_limits"):
+        lim = arm.joint_limits
+        return Limits(lim.lower, lim.upper, lim.velocity, lim.acceleration, lim.jerk)
+    lim = arm.limits
+    return Limits(lim.lower, lim.upper, lim.velocity, lim.require("acceleration"), lim.jerk)
+
+
+class Trajectory:
+    """The time-parameterised joint trajectory of a tour, any robot.
 
     Attributes:
-        arm: the robot.
-        legs: the moves, in order (the last returns to the first subtask).
+        arm: the robot's model (a planar :class:`~subtask_opt.arm.model.Arm` or a
+            :class:`~subtask_opt.arm.serial.SerialArm`).
+        legs: the moves, in order.
         duration: total time (s).
-        predicted_time: the tour time the sequencing model promised.
+        predicted_time: the tour time the search planned.
         time_model: the model the tour was optimised under.
+        problem: the compiled problem the tour belongs to (its targets, and a serial
+            arm's collision checker), or None.
+        limits: the joint limits (:func:`arm_limits` of ``arm``).
     """
 
-    def __init__(self, arm: Arm, legs: list[Leg], predicted_time: float,
-                 time_model: str) -> None:
+    def __init__(self, arm: Any, legs: list[Leg], predicted_time: float, time_model: str,
+                 problem: Any = None) -> None:
+        if not legs:
+            raise ParameterError("a trajectory needs at least one leg")
         self.arm = arm
         self.legs = legs
         self.predicted_time = float(predicted_time)
         self.time_model = time_model
-        self._starts = np.array([leg.start for leg in legs] + [legs[-1].start
-                                                               + legs[-1].duration])
-        self.duration = float(self._starts[-1])
+        self.problem = problem
+        self.limits = arm_limits(arm)
+        self.starts = np.array([leg.start for leg in legs] + [legs[-1].start
+                                                              + legs[-1].duration])
+        self.duration = float(self.starts[-1])
+
+    @property
+    def planar(self) -> bool:
+        return hasattr(self.arm, "kinematics")
 
     def __repr__(self) -> str:
         n_line = sum(leg.kind == "line" for leg in self.legs)
-        return (f"TourTrajectory({len(self.legs)} legs: {n_line} lines, "
+        return (f"Trajectory({self.arm.name}: {len(self.legs)} legs, {n_line} lines, "
                 f"{len(self.legs) - n_line} joint moves; duration {self.duration:.4f} s)")
 
-    def states(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, qd, qdd), each (T, 2), at tour times t (clamped to [0, duration])."""
+    def states(self, t: Any) -> States:
+        """(q, qd, qdd), each (T, n), at tour times t (clamped to [0, duration])."""
         t = np.atleast_1d(np.asarray(t, dtype=np.float64))
         if not np.all(np.isfinite(t)):
             raise ParameterError(f"times must be finite, got {t[~np.isfinite(t)][:3].tolist()}")
         t = np.clip(t, 0.0, self.duration)
-        q = np.empty((len(t), 2))
-        qd = np.empty((len(t), 2))
-        qdd = np.empty((len(t), 2))
-        which = np.clip(np.searchsorted(self._starts, t, side="right") - 1, 0,
+        n = len(self.limits.velocity)
+        q, qd, qdd = (np.empty((len(t), n)) for _ in range(3))
+        which = np.clip(np.searchsorted(self.starts, t, side="right") - 1, 0,
                         len(self.legs) - 1)
         for k in np.unique(which):
             sel = which == k
@@ -167,24 +201,33 @@ class TourTrajectory:
             q[sel], qd[sel], qdd[sel] = leg.states(t[sel] - leg.start)
         return q, qd, qdd
 
-    def at_time(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Joint position, velocity and acceleration, each (2,), at time t (s)."""
+    def at_time(self, t: float) -> States:
+        """Joint position, velocity and acceleration, each (n,), at time t (s)."""
         q, qd, qdd = self.states([t])
         return q[0], qd[0], qdd[0]
 
-    def sample(self, dt: float = 0.01) -> TrajectorySamples:
-        """Samples every ``dt`` seconds from 0, plus the final instant.
+    def sample_times(self, dt: float) -> np.ndarray:
+        """Every ``dt`` s from 0, plus every leg boundary (sorted, unique).
 
         Raises:
             ParameterError: dt outside [MIN_DT, MAX_DT] or more than MAX_SAMPLES samples.
         """
-        n = _sample_count("TourTrajectory.sample", self.duration, dt)
-        t = np.arange(n + 1) * dt
-        if t[-1] < self.duration:
-            t = np.append(t, self.duration)
+        n = _sample_count("Trajectory", self.duration, dt)
+        grid = np.arange(n + 1) * dt
+        return np.union1d(grid[grid <= self.duration], self.starts)
+
+    def tool_positions(self, q: np.ndarray) -> np.ndarray:
+        """The tool tip at joint rows q: (T, 2) ``x, y`` (planar) or (T, 3) (serial)."""
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        if self.planar:
+            return _k.fk_batch(self.arm.kinematics, q)[:, :2]
+        return np.array([self.arm.fk(row)[:3, 3] for row in q]).reshape(-1, 3)
+
+    def sample(self, dt: float = 0.01) -> TrajectorySamples:
+        """Samples every ``dt`` seconds from 0, plus every leg boundary."""
+        t = self.sample_times(dt)
         q, qd, qdd = self.states(t)
-        xy = _k.fk_batch(self.arm.kinematics, np.ascontiguousarray(q))[:, :2]
-        return TrajectorySamples(t, q, qd, qdd, xy)
+        return TrajectorySamples(t, q, qd, qdd, self.tool_positions(q))
 
     def to_csv(self, path: str | Path, dt: float = 0.01) -> Path:
         """Write the samples at step ``dt`` as CSV (see :meth:`TrajectorySamples.to_csv`)."""
@@ -205,46 +248,52 @@ def _sample_count(owner: str, duration: float, dt: float) -> int:
     return int(math.floor(duration / dt))
 
 
-def _ruckig_leg(q0: np.ndarray, q1: np.ndarray, arm: Arm):
-    """Ruckig's rest-to-rest trajectory q0 -> q1: (duration, evaluator)."""
-    from ruckig import InputParameter, Result, Ruckig, Trajectory
+def _profile_eval(profile: Any, n: int) -> Callable[[np.ndarray], States]:
+    """Vectorised ``at_time`` of a ruckig trajectory (or a StraightLeg) of n joints."""
+    def evaluate(t: np.ndarray) -> States:
+        out = [profile.at_time(float(tk)) for tk in t]
+        return tuple(np.array([o[i] for o in out], dtype=np.float64).reshape(-1, n)
+                     for i in range(3))  # type: ignore[return-value]
+    return evaluate
 
-    jl = arm.joint_limits
-    otg = Ruckig(2)
-    inp = InputParameter(2)
-    inp.current_position = [float(v) for v in q0]
-    inp.target_position = [float(v) for v in q1]
-    inp.current_velocity = [0.0, 0.0]
-    inp.current_acceleration = [0.0, 0.0]
-    inp.target_velocity = [0.0, 0.0]
-    inp.target_acceleration = [0.0, 0.0]
-    inp.max_velocity = [float(v) for v in jl.velocity]
-    inp.max_acceleration = [float(v) for v in jl.acceleration]
-    inp.max_jerk = [math.inf, math.inf] if jl.jerk is None else [float(v) for v in jl.jerk]
-    traj = Trajectory(2)
-    status = otg.calculate(inp, traj)
+
+def _still(q: np.ndarray) -> Callable[[np.ndarray], States]:
+    """A leg of zero length: at rest at q."""
+    def evaluate(t: np.ndarray) -> States:
+        return np.tile(q, (len(t), 1)), np.zeros((len(t), q.size)), np.zeros((len(t), q.size))
+    return evaluate
+
+
+def _synchronised(q0: np.ndarray, q1: np.ndarray, lim: Limits) -> tuple[float, Any]:
+    """Ruckig's time-synchronised rest-to-rest move q0 -> q1: (duration, evaluator)."""
+    from ruckig import InputParameter, Result, Ruckig
+    from ruckig import Trajectory as Profile
+
+    n = q0.size
+    otg = Ruckig(n)
+    inp = InputParameter(n)
+    inp.current_position = q0.tolist()
+    inp.target_position = q1.tolist()
+    inp.current_velocity = inp.current_acceleration = [0.0] * n
+    inp.target_velocity = inp.target_acceleration = [0.0] * n
+    inp.max_velocity = lim.velocity.tolist()
+    inp.max_acceleration = lim.acceleration.tolist()
+    inp.max_jerk = [math.inf] * n if lim.jerk is None else lim.jerk.tolist()
+    profile = Profile(n)
+    status = otg.calculate(inp, profile)
     if status not in (Result.Working, Result.Finished):
         raise ParameterError(f"ruckig cannot plan the joint move {q0.tolist()} -> "
                              f"{q1.tolist()}: {status}")
-
-    def evaluate(t: np.ndarray):
-        out = [traj.at_time(float(tk)) for tk in t]
-        return (np.array([o[0] for o in out]).reshape(-1, 2),
-                np.array([o[1] for o in out]).reshape(-1, 2),
-                np.array([o[2] for o in out]).reshape(-1, 2))
-
-    return float(traj.duration), evaluate
+    return float(profile.duration), _profile_eval(profile, n)
 
 
 def _line_leg(p_from: np.ndarray, p_to: np.ndarray, q_from: np.ndarray, q_to: np.ndarray,
-              branch: int, arm: Arm, grid: int, reverse: bool) -> Any:
+              branch: int, arm: Any, grid: int, reverse: bool) -> Any:
     """Straight line p_from -> p_to as the ``line`` model drives it: (duration, evaluator).
 
-    None when the arm cannot follow the line on ``branch``.
-
-    The profile is computed in the direction the travel-time tensor used
-    (``reverse``: computed p_to -> p_from and played backwards), so the
-    duration is the tensor's time to the last bit.
+    None when the arm cannot follow the line on ``branch``. The profile is computed in
+    the direction the travel-time tensor used (``reverse``: computed p_to -> p_from and
+    played backwards), so the duration is the tensor's time to the last bit.
     """
     from subtask_opt.arm.timing.models import line_limits
 
@@ -257,7 +306,7 @@ def _line_leg(p_from: np.ndarray, p_to: np.ndarray, q_from: np.ndarray, q_to: np
     if st != _lk.LINE_OK:
         return None
 
-    def evaluate(t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def evaluate(t: np.ndarray) -> States:
         tt = duration - t if reverse else t
         q, qd, qdd, _ = _lk.line_states(arm.kinematics, a, b, branch, sg, qs, x, w, tau, lam,
                                         np.ascontiguousarray(tt, dtype=np.float64))
@@ -266,45 +315,73 @@ def _line_leg(p_from: np.ndarray, p_to: np.ndarray, q_from: np.ndarray, q_to: np
     return float(duration), evaluate
 
 
-def tour_trajectory(problem: PlanarProblem, result: Result) -> TourTrajectory:
-    """The executable joint trajectory of ``result``'s tour (see the module docstring).
+def build_trajectory(result: Any) -> Trajectory:
+    """The executable joint trajectory of an arm problem's answer (the module docstring).
 
     Raises:
-        ParameterError: the problem has no arm (a custom matrix), or the result
-            does not belong to the problem.
+        ParameterError: not the :class:`~subtask_opt.tour.solve.Result` of an arm problem.
     """
-    from subtask_opt.arm.planar_problem import PlanarProblem
-    from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE
+    from subtask_opt.arm.report import TourReport
+    from subtask_opt.arm.serial_problem import SerialReport
     from subtask_opt.tour.solve import Result
 
-    if not isinstance(problem, PlanarProblem) or problem.arm is None:
-        raise ParameterError("tour_trajectory needs a problem built from subtasks and an arm "
-                             f"(got {type(problem).__name__}; a custom matrix has no robot to "
-                             "move)")
-    if not isinstance(result, Result):
-        raise ParameterError(f"tour_trajectory needs the problem's Result, got "
-                             f"{type(result).__name__}")
-    if len(result.order) != problem.size:
-        raise ParameterError(f"result has {len(result.order)} subtasks, the problem "
-                             f"{problem.size}")
+    report = getattr(result, "report", None)
+    if not isinstance(result, Result) or not isinstance(report, (TourReport, SerialReport)):
+        what = ("a Result without an arm's report" if isinstance(result, Result)
+                else type(result).__name__)
+        raise ParameterError(f"trajectory needs the Result of an arm problem "
+                             f"(solve(ArmProblem)), got {what}")
+    if isinstance(report, SerialReport):
+        return from_serial_report(report)
+    return _planar(result, report)
+
+
+def from_serial_report(report: Any) -> Trajectory:
+    """Phase-synchronised ruckig legs through the report's configurations from home."""
+    from subtask_opt.arm.timing.joint_legs import ruckig_trajectory
+
+    problem = report.problem
+    lim = arm_limits(problem.arm)
+    path = report.tour_configurations()
+    stops = [HOME] + [int(i) for i in report.order] + ([] if report.open_path else [HOME])
+    index = [0 if s == HOME else int(report.configuration_index[s]) for s in stops]
+    legs: list[Leg] = []
+    start = 0.0
+    for k in range(len(path) - 1):
+        if np.array_equal(path[k], path[k + 1]):
+            duration, ev = 0.0, _still(path[k].copy())
+        else:
+            profile = ruckig_trajectory(path[k], path[k + 1], lim.velocity, lim.acceleration,
+                                        lim.jerk)
+            duration, ev = profile.duration, _profile_eval(profile, path.shape[1])
+        legs.append(Leg(start, duration, "joint", stops[k], stops[k + 1], index[k],
+                        index[k + 1], path[k].copy(), path[k + 1].copy(), ev))
+        start += duration
+    return Trajectory(problem.arm, legs, report.planned_time, "joint", problem)
+
+
+def _planar(result: Any, report: Any) -> Trajectory:
+    """Ruckig joint moves and straight lines as the time model timed the tour's legs."""
+    from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE
+
+    problem = report.problem  # the compiled problem searched (a home point its last subtask)
     arm = problem.arm
     timing = problem.timing
-    if result.report is None:
-        raise ParameterError("tour_trajectory needs the Result of an arm problem (it has no "
-                             "report of configurations)")
-    configs = np.asarray(result.report.configurations, dtype=np.int64)
+    lim = arm_limits(arm)
+    configs = np.asarray(report.configurations, dtype=np.int64)
+    homed = problem.size > len(result.order)
+    stops = ([problem.size - 1] if homed else []) + [int(i) for i in result.order]
+    if result.constraints is None or result.constraints.tour != "open":
+        stops.append(stops[0])
     # A Cartesian model (no move tensor): each leg is driven as the ``line`` model with
     # the joint fallback would drive it, a line where the arm can follow it.
     moves = timing.branch_moves
     qb = timing.branch_joints
     grid = timing.line_grid or 512
     points = problem.subtasks.points
-    order = np.asarray(result.order, dtype=np.int64)
-    n = len(order)
     legs: list[Leg] = []
     start = 0.0
-    for k in range(n):
-        i, j = int(order[k]), int(order[(k + 1) % n])
+    for i, j in zip(stops[:-1], stops[1:], strict=True):
         ci, cj = int(configs[i]), int(configs[j])
         if moves is None or qb is None:
             assert timing.joint_positions is not None
@@ -321,34 +398,35 @@ def tour_trajectory(problem: PlanarProblem, result: Result) -> TourTrajectory:
             if line is None and moves is not None:
                 raise ParameterError(f"the straight line {i} -> {j} is not feasible for "
                                      f"{arm.name}, but the time model drove it")
-        if line is not None:
-            duration, ev = line
-            kind = "line"
-        else:
-            duration, ev = _ruckig_leg(q0, q1, arm)
-            kind = "joint"
-        legs.append(Leg(start, duration, kind, i, j, ci, cj, q0.copy(), q1.copy(), ev))
+        duration, ev = line if line is not None else _synchronised(
+            np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64), lim)
+        home = problem.size - 1 if homed else None
+        legs.append(Leg(start, duration, "line" if line is not None else "joint",
+                        HOME if i == home else i, HOME if j == home else j, ci, cj,
+                        np.array(q0, dtype=np.float64), np.array(q1, dtype=np.float64), ev))
         start += duration
-    return TourTrajectory(arm, legs, result.total_time, problem.time_model)
+    return Trajectory(arm, legs, result.total_time, problem.time_model, problem)
 
 
 @dataclass(frozen=True)
 class ValidationReport:
-    """What :func:`validate_trajectory` found.
+    """What :func:`validate` found.
 
     Attributes:
-        ok: no limit exceeded at any sample.
-        n_samples: samples checked.
-        dt: the sampling step (s).
-        duration, predicted_time: executed and promised tour times (s).
-        max_velocity_ratio, max_acceleration_ratio: max over samples of
-            |qd| / limit and |qdd| / limit, per joint.
+        ok: nothing violated.
+        n_samples, dt: samples checked and the step (s).
+        duration, predicted_time: executed and planned tour times (s).
+        max_velocity_ratio, max_acceleration_ratio: max over samples of |qd| / limit and
+            |qdd| / limit, per joint.
+        max_jerk_ratio: the same for the finite-difference jerk on the uniform grid, per
+            joint; None when the arm has no jerk limits (not checked).
         position_margin: smallest distance to a position limit (rad; < 0 beyond).
-        violations: one line per exceeded limit (first sample of each kind).
-        rtol, qtol: the tolerances used.
-        max_jerk_ratio: max over the uniform grid of |finite-difference jerk| /
-            limit, per joint; None when the arm has no jerk limits (not checked).
-        jtol: the relative tolerance on the jerk limits.
+        collisions: samples in collision; None when the problem has no collision checker.
+        max_position_error: worst FK miss of a stop's configuration (m).
+        max_axis_error: worst angle between a stop's tool axis and its target's (rad);
+            None for planar points (no axis).
+        violations: one line per kind of violation.
+        rtol, qtol, jtol: the tolerances used.
     """
 
     ok: bool
@@ -356,14 +434,17 @@ class ValidationReport:
     dt: float
     duration: float
     predicted_time: float
-    max_velocity_ratio: tuple[float, float]
-    max_acceleration_ratio: tuple[float, float]
+    max_velocity_ratio: tuple[float, ...]
+    max_acceleration_ratio: tuple[float, ...]
+    max_jerk_ratio: tuple[float, ...] | None
     position_margin: float
+    collisions: int | None
+    max_position_error: float
+    max_axis_error: float | None
     violations: tuple[str, ...]
     rtol: float
     qtol: float
-    max_jerk_ratio: tuple[float, float] | None = None
-    jtol: float = DEFAULT_JTOL
+    jtol: float
 
     @property
     def duration_error(self) -> float:
@@ -371,60 +452,82 @@ class ValidationReport:
         return abs(self.duration - self.predicted_time) / self.predicted_time
 
     def summary(self) -> str:
-        """One line: valid or not, the samples, durations and the largest limit ratios."""
-        head = "valid" if self.ok else f"INVALID ({len(self.violations)} violations)"
+        """One line: valid or not, the samples, durations and the largest ratios."""
+        head = "valid" if self.ok else f"INVALID ({'; '.join(self.violations)})"
         jerk = ("jerk not checked (no jerk limits)" if self.max_jerk_ratio is None
                 else f"max |dddq|/limit {max(self.max_jerk_ratio):.4f}")
+        collisions = ("" if self.collisions is None
+                      else f", samples in collision {self.collisions}")
+        axis = "" if self.max_axis_error is None else f" / {self.max_axis_error:.2e} rad"
         return (f"trajectory {head}: {self.n_samples} samples at dt={self.dt:g} s, duration "
-                f"{self.duration:.4f} s (predicted {self.predicted_time:.4f} s), max |qd|/limit "
+                f"{self.duration:.4f} s (planned {self.predicted_time:.4f} s), max |qd|/limit "
                 f"{max(self.max_velocity_ratio):.4f}, max |qdd|/limit "
-                f"{max(self.max_acceleration_ratio):.4f}, {jerk}")
+                f"{max(self.max_acceleration_ratio):.4f}, {jerk}{collisions}, FK miss "
+                f"{self.max_position_error:.2e} m{axis}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: the verdict, the largest ratios and errors, the tolerances."""
+        return {"valid": self.ok, "violations": list(self.violations),
+                "duration": self.duration, "planned_time": self.predicted_time,
+                "max_velocity_ratio": max(self.max_velocity_ratio),
+                "max_acceleration_ratio": max(self.max_acceleration_ratio),
+                "max_jerk_ratio": (None if self.max_jerk_ratio is None
+                                   else max(self.max_jerk_ratio)),
+                "samples_in_collision": self.collisions,
+                "max_position_error": self.max_position_error,
+                "max_axis_error": self.max_axis_error,
+                "samples": self.n_samples, "dt": self.dt,
+                "tolerances": {"rtol": self.rtol, "qtol": self.qtol, "jtol": self.jtol}}
 
 
-def validate_trajectory(trajectory: TourTrajectory, *, dt: float = 1e-3,
-                        rtol: float = DEFAULT_RTOL, qtol: float = DEFAULT_QTOL,
-                        jtol: float = DEFAULT_JTOL) -> ValidationReport:
-    """Sample ``trajectory`` every ``dt`` seconds (and at every leg boundary) and check limits.
+def validate(trajectory: Trajectory, *, dt: float | None = None, rtol: float = DEFAULT_RTOL,
+             qtol: float = DEFAULT_QTOL, jtol: float = DEFAULT_JTOL) -> ValidationReport:
+    """Sample ``trajectory`` every ``dt`` seconds (and at every leg boundary) and check it.
 
-    A sample violates a limit when a joint position leaves [lower - qtol,
-    upper + qtol], or |velocity| > (1 + rtol) limit, or |acceleration| >
-    (1 + rtol) limit. When the arm has jerk limits, the jerk is checked by
-    finite differences: on the uniform grid t_k = k dt, |qdd(t_k+1) - qdd(t_k)| / dt
-    must stay within (1 + jtol) x the jerk limit (the difference quotient is the
-    mean jerk over the step, never above the largest one for a continuous
-    acceleration; an acceleration step shows up as a jerk of step / dt). The arm
-    must also be at rest at the subtasks.
+    A sample violates a limit when a joint position leaves [lower - qtol, upper + qtol],
+    or |velocity| or |acceleration| > (1 + rtol) x its limit. With jerk limits, the jerk
+    is checked by finite differences: on the uniform grid t_k = k dt,
+    |qdd(t_k+1) - qdd(t_k)| / dt must stay within (1 + jtol) x the limit (the difference
+    quotient is the mean jerk over the step, never above the largest one for a
+    continuous acceleration; an acceleration step shows up as a jerk of step / dt).
+    The arm must be at rest at every stop; every stop's configuration must reach its
+    target within :data:`FK_POSITION_TOL` m (and a 3-D target's axis within
+    :data:`FK_AXIS_TOL` rad); the duration must be within :data:`DURATION_RTOL` of the
+    planned time for the models the arm executes as timed (``joint``, ``line``); and,
+    where the problem has a collision checker, no sample may be in collision.
+
+    ``dt`` defaults to 1 ms, or 5 ms when every sample is also checked for collisions.
 
     Raises:
         ParameterError: not a trajectory, a tolerance <= 0, dt outside
             [MIN_DT, MAX_DT] or more than MAX_SAMPLES samples.
     """
-    if not isinstance(trajectory, TourTrajectory):
-        raise ParameterError(f"validate_trajectory needs a TourTrajectory, "
-                             f"got {type(trajectory).__name__}")
-    require_positive("validate_trajectory", "rtol", rtol)
-    require_positive("validate_trajectory", "qtol", qtol)
-    require_positive("validate_trajectory", "jtol", jtol)
-    n = _sample_count("validate_trajectory", trajectory.duration, dt)
-    jl = trajectory.arm.joint_limits
-    grid = np.arange(n + 1) * dt
-    grid = grid[grid <= trajectory.duration]
-    t = np.union1d(grid, trajectory._starts)
+    if not isinstance(trajectory, Trajectory):
+        raise ParameterError(f"validate needs a trajectory from subtask_opt.trajectory, got "
+                             f"{type(trajectory).__name__}")
+    for name, value in (("rtol", rtol), ("qtol", qtol), ("jtol", jtol)):
+        require_positive("validate", name, value)
+    problem = trajectory.problem
+    checker = getattr(problem, "checker", None)
+    if dt is None:
+        dt = 1e-3 if checker is None else 5e-3
+    t = trajectory.sample_times(dt)
+    grid = np.isin(t, np.arange(_sample_count("validate", trajectory.duration, dt) + 1) * dt)
+    lim = trajectory.limits
     q, qd, qdd = trajectory.states(t)
-    vr = np.abs(qd) / jl.velocity
-    ar = np.abs(qdd) / jl.acceleration
-    margin = np.minimum(q - jl.lower, jl.upper - q)
+    vr = np.abs(qd) / lim.velocity
+    ar = np.abs(qdd) / lim.acceleration
+    margin = np.minimum(q - lim.lower, lim.upper - q)
     checks = [("position", t, margin < -qtol, lambda s, a: f"q{a + 1} = {q[s, a]:.6g} rad"),
               ("velocity", t, vr > 1 + rtol,
                lambda s, a: f"|dq{a + 1}| = {vr[s, a]:.6g} x limit"),
               ("acceleration", t, ar > 1 + rtol,
                lambda s, a: f"|ddq{a + 1}| = {ar[s, a]:.6g} x limit")]
-    jerk_ratio: tuple[float, float] | None = None
-    if jl.jerk is not None and len(grid) > 1:
-        on_grid = np.isin(t, grid)
-        jr = np.abs(np.diff(qdd[on_grid], axis=0)) / np.diff(t[on_grid])[:, None] / jl.jerk
-        jerk_ratio = (float(jr[:, 0].max()), float(jr[:, 1].max()))
-        checks.append(("jerk", t[on_grid], jr > 1 + jtol,
+    jerk_ratio: tuple[float, ...] | None = None
+    if lim.jerk is not None and grid.sum() > 1:
+        jr = np.abs(np.diff(qdd[grid], axis=0)) / np.diff(t[grid])[:, None] / lim.jerk
+        jerk_ratio = tuple(float(v) for v in jr.max(axis=0))
+        checks.append(("jerk", t[grid], jr > 1 + jtol,
                        lambda s, a: f"|dddq{a + 1}| = {jr[s, a]:.6g} x limit by finite "
                                     f"differences at dt = {dt:g} s"))
     violations = []
@@ -434,18 +537,59 @@ def validate_trajectory(trajectory: TourTrajectory, *, dt: float = 1e-3,
             s, a = hits[0]
             violations.append(f"{name} limit exceeded at t = {times[s]:.6g} s ({text(s, a)}; "
                               f"{len(hits)} samples)")
-    rest = np.abs(qd[np.isin(t, trajectory._starts)]).max()
-    if rest > 1e-6 * float(np.max(jl.velocity)):
-        violations.append(f"arm not at rest at a subtask (|qd| = {rest:.3g} rad/s)")
+    rest = float(np.abs(qd[np.isin(t, trajectory.starts)]).max())
+    if rest > 1e-6 * float(np.max(lim.velocity)):
+        violations.append(f"arm not at rest at a stop (|qd| = {rest:.3g} rad/s)")
+    collisions = None
+    if checker is not None:
+        collisions = int(sum(checker.in_collision(row) for row in q))
+        if collisions:
+            violations.append(f"{collisions} samples in collision")
+    position_error, axis_error = _fk_misses(trajectory)
+    if position_error > FK_POSITION_TOL or (axis_error or 0.0) > FK_AXIS_TOL:
+        violations.append(f"a configuration misses its target by {position_error:.3g} m"
+                          + ("" if axis_error is None else f" / {axis_error:.3g} rad"))
+    executed_as_timed = trajectory.time_model in ("joint", "line")
+    if executed_as_timed and (abs(trajectory.duration - trajectory.predicted_time)
+                              > DURATION_RTOL * trajectory.predicted_time):
+        violations.append(f"duration {trajectory.duration:.4f} s differs from the planned "
+                          f"{trajectory.predicted_time:.4f} s by more than "
+                          f"{100 * DURATION_RTOL:g}%")
     return ValidationReport(
         ok=not violations, n_samples=len(t), dt=float(dt), duration=trajectory.duration,
         predicted_time=trajectory.predicted_time,
-        max_velocity_ratio=(float(vr[:, 0].max()), float(vr[:, 1].max())),
-        max_acceleration_ratio=(float(ar[:, 0].max()), float(ar[:, 1].max())),
-        position_margin=float(margin.min()), violations=tuple(violations), rtol=float(rtol),
-        qtol=float(qtol), max_jerk_ratio=jerk_ratio, jtol=float(jtol))
+        max_velocity_ratio=tuple(float(v) for v in vr.max(axis=0)),
+        max_acceleration_ratio=tuple(float(v) for v in ar.max(axis=0)),
+        max_jerk_ratio=jerk_ratio, position_margin=float(margin.min()),
+        collisions=collisions, max_position_error=position_error, max_axis_error=axis_error,
+        violations=tuple(violations), rtol=float(rtol), qtol=float(qtol), jtol=float(jtol))
 
 
-__all__ = ["CSV_HEADER", "DEFAULT_JTOL", "DEFAULT_QTOL", "DEFAULT_RTOL", "Leg", "MAX_DT",
-           "MAX_SAMPLES", "MIN_DT", "TourTrajectory", "TrajectorySamples", "ValidationReport",
-           "tour_trajectory", "validate_trajectory"]
+def _fk_misses(trajectory: Trajectory) -> tuple[float, float | None]:
+    """The worst distance (m) and, for 3-D targets, tool-axis angle (rad) between a stop's
+    configuration and its target (0 and None without a problem to compare with)."""
+    problem = trajectory.problem
+    ends = [(leg.to_stop, leg.q_to) for leg in trajectory.legs if leg.to_stop != HOME]
+    if problem is None or not ends:
+        return 0.0, None
+    stops = np.array([s for s, _ in ends])
+    q = np.array([qs for _, qs in ends])
+    if trajectory.planar:
+        miss = np.hypot(*(trajectory.tool_positions(q) - problem.subtasks.points[stops]).T)
+        return float(miss.max()), None
+    position = axis = 0.0
+    for stop, qs in ends:
+        pose = trajectory.arm.fk(qs)
+        candidates = problem.targets.poses[stop]
+        errors = np.linalg.norm(candidates[:, :3, 3] - pose[:3, 3], axis=1)
+        best = int(np.argmin(errors))
+        cosine = float(np.clip(candidates[best, :3, 2] @ pose[:3, 2], -1.0, 1.0))
+        position = max(position, float(errors[best]))
+        axis = max(axis, math.acos(cosine))
+    return position, axis
+
+
+__all__ = ["DEFAULT_JTOL", "DEFAULT_QTOL", "DEFAULT_RTOL", "HOME", "Leg", "Limits",
+           "MAX_DT", "MAX_SAMPLES", "MIN_DT", "Trajectory", "TrajectorySamples",
+           "ValidationReport", "arm_limits", "build_trajectory",
+           "from_serial_report", "validate"]

@@ -1,5 +1,5 @@
 """``subtask-opt bench robotsp``: RoboTSP's drilling benchmark (see
-:mod:`subtask_opt.arm.robotsp_bench`)."""
+:mod:`subtask_opt.papers.robotsp`)."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def _sizes(text: str | None) -> list[int] | None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from subtask_opt.arm.robotsp_bench import run, table
+    from subtask_opt.papers.robotsp import run, table
 
     report = run(args.data, sizes=_sizes(args.sizes), seed=args.seed)
     print(table(report))

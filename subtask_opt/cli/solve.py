@@ -88,6 +88,11 @@ def register(root: argparse._SubParsersAction) -> None:
                        help="visited first and last, not a subtask: a point X,Y (m) the planar "
                             "arm must reach, or for a serial arm its home configuration in "
                             "degrees (default there: the robot file's home, if any)")
+    shape.add_argument("--home-joints", type=signed_numbers, default=None,
+                       metavar="Q1,...,QN",
+                       help="the home as a configuration of any arm, in degrees (a planar "
+                            "arm starts there in that elbow; for a serial arm the same as "
+                            "--home)")
     shape.add_argument("--precedence", default=None, metavar="FILE",
                        help="text file of lines 'a,b': subtask a before subtask b (0-based "
                             "row indices, as in the printed order)")
@@ -255,9 +260,19 @@ def _targets(args: argparse.Namespace, robot: Any) -> Any:
 
 
 def _home(args: argparse.Namespace, robot: Any) -> Any:
-    """``--home``: a planar arm's point X,Y (m), a serial arm's configuration (degrees)."""
+    """``--home``: a planar arm's point X,Y (m), a serial arm's configuration (degrees);
+    ``--home-joints``: any arm's configuration (degrees)."""
     from subtask_opt.base.errors import ParameterError
 
+    if args.home_joints is not None:
+        if args.home is not None:
+            raise ParameterError("give the home once: --home or --home-joints, not both")
+        if len(args.home_joints) != robot.nq:
+            raise ParameterError(f"--home-joints takes {robot.nq} joint values (degrees) for "
+                                 f"{robot.name}, got {len(args.home_joints)}")
+        from subtask_opt.arm.problem import Joints
+
+        return Joints(np.radians(args.home_joints))
     if args.home is None:
         return None
     if robot.planar:
@@ -299,18 +314,9 @@ def _stop(args: argparse.Namespace, started: float) -> Any:
 
 
 def _trajectory_json(trajectory: Any, check: Any) -> dict[str, Any]:
-    from subtask_opt.arm.trajectory import ValidationReport
-
-    if isinstance(check, ValidationReport):
-        return {"duration": trajectory.duration, "valid": check.ok,
-                "max_velocity_ratio": max(check.max_velocity_ratio),
-                "max_acceleration_ratio": max(check.max_acceleration_ratio),
-                "max_jerk_ratio": (None if check.max_jerk_ratio is None
-                                   else max(check.max_jerk_ratio)),
-                "valid_tolerances": {"rtol": check.rtol, "jtol": check.jtol},
-                "legs": [leg.kind for leg in trajectory.legs]}
-    return {"duration": trajectory.duration, "valid": check.ok,
-            "violations": list(check.violations)}
+    """The ``trajectory`` entry of ``--json``: its check and the kind of every leg."""
+    return {**check.to_dict(), "duration": trajectory.duration,
+            "legs": [leg.kind for leg in trajectory.legs]}
 
 
 def _constraints(args: argparse.Namespace, planar: bool) -> Any:
@@ -323,12 +329,11 @@ def _constraints(args: argparse.Namespace, planar: bool) -> Any:
     # a planar arm's --first is its problem's first subtask (ArmProblem.first)
     start = None if planar else args.first
     constraints = TourConstraints(tour=args.tour, start=start, end=args.end, precedence=pairs)
-    if planar and (args.tour == "open" or args.home is not None):
-        wanted = [flag for flag, value in (("--plot", args.plot), ("--trajectory",
-                  args.trajectory), ("--animate", args.animate)) if value]
-        if wanted:
-            raise ParameterError(f"{', '.join(wanted)} draw closed tours over the subtasks "
-                                 "(planar arms); not available with --tour open or --home yet")
+    homed = args.home is not None or args.home_joints is not None
+    if planar and args.plot and (args.tour == "open" or homed):
+        raise ParameterError("--plot draws closed tours over the subtasks (planar arms); not "
+                             "available with --tour open or --home yet (--trajectory and "
+                             "--animate are)")
     return constraints
 
 
@@ -337,14 +342,13 @@ def _executed(args: argparse.Namespace, result: Any) -> Any:
     from subtask_opt.arm.problem import trajectory, validate
 
     executed = trajectory(result)
-    planar = not hasattr(executed, "result")
-    check = validate(executed, dt=min(args.dt, 1e-3) if planar else min(args.dt, 0.005))
+    check = validate(executed, dt=min(args.dt, 1e-3 if executed.planar else 0.005))
     print(check.summary())
     if not check.ok:
         print("subtask-opt: failed: the executed trajectory is invalid: "
               + "; ".join(check.violations), file=sys.stderr)
         return None
-    model = result.report.time_model if planar else "joint"
+    model = executed.time_model
     if model in ("paper", "trapezoid"):
         print(f"note: the {model} model promised {result.total_time:.4f} s; driving its "
               f"straight lines within the joint limits takes {executed.duration:.4f} s")

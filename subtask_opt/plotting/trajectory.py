@@ -1,4 +1,4 @@
-"""Figures and animation of an executed tour (:class:`subtask_opt.arm.trajectory.TourTrajectory`).
+"""Figures and animation of an executed tour (:class:`subtask_opt.arm.trajectory.Trajectory`).
 
 * :func:`plot_joint_profiles` - joint positions, velocities and accelerations
   against time, with the limits;
@@ -25,14 +25,14 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from subtask_opt.arm.planar_problem import PlanarProblem
-    from subtask_opt.arm.trajectory import TourTrajectory
+    from subtask_opt.arm.trajectory import Trajectory
 
 
-def plot_joint_profiles(trajectory: TourTrajectory, *, dt: float = 0.005,
+def plot_joint_profiles(trajectory: Trajectory, *, dt: float = 0.005,
                         fig: Figure | None = None) -> Figure:
     """Three stacked panels: q, q_dot, q_ddot of both joints over the tour, limits dashed.
 
-    ``dt`` is the sampling step (s), in the range of :meth:`TourTrajectory.sample`.
+    ``dt`` is the sampling step (s), in the range of :meth:`Trajectory.sample`.
     """
     import matplotlib.pyplot as plt
 
@@ -63,13 +63,13 @@ def plot_joint_profiles(trajectory: TourTrajectory, *, dt: float = 0.005,
     return fig
 
 
-def _title(trajectory: TourTrajectory) -> str:
+def _title(trajectory: Trajectory) -> str:
     """Robot, time model, N and the executed (and predicted) tour time."""
     return (f"{trajectory.arm.name}, {trajectory.time_model} model, N = {len(trajectory.legs)}: "
             f"executed {trajectory.duration:.3f} s (predicted {trajectory.predicted_time:.3f} s)")
 
 
-def plot_executed_path(problem: PlanarProblem, trajectory: TourTrajectory, *,
+def plot_executed_path(problem: PlanarProblem, trajectory: Trajectory, *,
                        dt: float = 0.005, ax: Axes | None = None) -> Axes:
     """The tip's path over the workspace: straight legs solid, joint moves dashed."""
     import matplotlib.pyplot as plt
@@ -99,7 +99,7 @@ def plot_executed_path(problem: PlanarProblem, trajectory: TourTrajectory, *,
     return ax
 
 
-def animate_tour(problem: PlanarProblem, trajectory: TourTrajectory, path: str | Path, *,
+def animate_tour(problem: PlanarProblem, trajectory: Trajectory, path: str | Path, *,
                  fps: int = 15, speed: float = 1.0, max_frames: int = 150,
                  dpi: int = 72, progress: bool = False) -> Path:
     """Write a GIF of the arm executing the tour.

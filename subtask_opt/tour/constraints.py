@@ -68,8 +68,9 @@ class TourConstraints:
             ``first``, else 0). Not with ``home``.
         end: the subtask an open path ends at (``None``: free), or the last one before
             the home of a closed tour (a planar arm's home point, a serial arm's home).
-        home: a home visited first and last (closed tours only): an ``(x, y)``
-            point for an arm problem, a node index for a matrix problem.
+        home: a home the tour starts at and, closed, returns to (an open path from
+            the home ends at its last subtask): an ``(x, y)`` point for a planar arm
+            problem, a node index for a matrix problem.
         precedence: pairs ``(a, b)``, subtask ``a`` before subtask ``b``
             (stored as a tuple of int pairs; checked acyclic on construction).
     """
@@ -93,9 +94,6 @@ class TourConstraints:
                                      f"to itself is a closed tour; use tour='closed'")
         if self.home is not None:
             object.__setattr__(self, "home", _home_value(self.home))
-            if self.tour != "closed":
-                raise ParameterError("TourConstraints.home needs tour='closed' (the home is "
-                                     "visited first and last); got tour='open'")
             if self.start is not None:
                 raise ParameterError(f"TourConstraints: home and start={self.start} contradict "
                                      "each other (with a home the tour starts at the home)")

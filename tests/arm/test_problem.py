@@ -2,7 +2,7 @@
 
 Oracles: brute force over every order and (by a layered shortest path) every configuration
 for the certificate and the lower bound; positions in the order for precedence and ends;
-the trajectory's own waypoints for where an open path ends.
+the trajectory's own states for where an open path ends.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import pytest
 
 import subtask_opt as so
 from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
+from subtask_opt.arm.trajectory import HOME as AT_HOME
 from subtask_opt.cli import main
 
 DATA = Path(__file__).resolve().parents[2] / "examples" / "data"
@@ -68,8 +69,10 @@ def test_open_tour_from_home_has_n_legs_and_ends_at_its_last_target(panel) -> No
     result = so.solve(panel, seed=1, constraints=so.TourConstraints(tour="open"))
     assert result.leg_times.shape == (20,)
     traj = so.trajectory(result)
-    np.testing.assert_allclose(traj.waypoints[0], HOME)
-    np.testing.assert_allclose(traj.waypoints[-1], result.configurations[result.order[-1]])
+    q_start, q_end = traj.states([0.0, traj.duration])[0]
+    np.testing.assert_allclose(q_start, HOME, atol=1e-12)
+    np.testing.assert_allclose(q_end, result.configurations[result.order[-1]], atol=1e-9)
+    assert traj.legs[0].from_stop == AT_HOME and traj.legs[-1].to_stop == result.order[-1]
     assert traj.duration == pytest.approx(result.total_time, rel=5e-3)
     closed = so.solve(panel, seed=1)
     assert closed.leg_times.shape == (21,)
@@ -209,3 +212,50 @@ def test_a_ur5_batch_of_two_files_equals_the_two_solo_runs(ur5, tmp_path) -> Non
         assert got.total_time == solo.total_time
     with pytest.raises(so.ParameterError, match="elbow applies to planar"):
         load_jobs(files[:1], robot="ur5", elbow=1)
+
+
+@pytest.mark.parametrize("tour", ["closed", "open"])
+@pytest.mark.parametrize("branch", [0, 1])
+def test_a_planar_home_configuration_is_the_brute_force_optimum_from_it(tour, branch) -> None:
+    """A home given as joints: the tour starts in that elbow; checked against every order
+    and every elbow of the targets, from the home built as a subtask by hand."""
+    from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
+
+    robot = so.load_robot("planar_2r")
+    arm = robot.model
+    targets = random_subtasks(arm, 5, seed=11)
+    point = np.array([0.35, 0.2])
+    q = arm.ik(point)[branch]
+    result = so.solve(so.ArmProblem(targets, robot, home=so.Joints(q)), seed=0,
+                      constraints=so.TourConstraints(tour=tour))
+    by_hand = PlanarProblem(SubtaskSet(np.vstack([targets.points, point])), arm)
+    t = by_hand.timing.branch_times  # (6, 2, 6, 2)
+    h = 5
+    best = np.inf
+    for order in itertools.permutations(range(5)):
+        for elbows in itertools.product((0, 1), repeat=5):
+            c = dict(zip(order, elbows, strict=True))
+            cost = t[h, branch, order[0], c[order[0]]] + sum(
+                t[a, c[a], b, c[b]] for a, b in zip(order[:-1], order[1:], strict=True))
+            if tour == "closed":
+                cost += t[order[-1], c[order[-1]], h, branch]
+            best = min(best, cost)
+    assert result.total_time == pytest.approx(best, rel=1e-9)
+    trajectory = so.trajectory(result)
+    np.testing.assert_allclose(trajectory.states([0.0])[0][0], q, atol=1e-12)
+    assert so.validate(trajectory).ok
+
+
+def test_a_planar_home_configuration_is_checked() -> None:
+    robot = so.load_robot("planar_2r")
+    targets = so.builtin_case("square20", robot.model)
+    up = so.Joints(robot.model.ik(np.array([0.35, 0.2]))[1])
+    with pytest.raises(so.ParameterError, match="elbow up .* fixed configurations"):
+        so.solve(so.ArmProblem(targets, robot, home=up, configurations="fixed"), seed=0)
+    with pytest.raises(so.InputDataError, match="outside the joint limits"):
+        so.ArmProblem(targets, robot, home=so.Joints([3.0, 0.0]))
+    with pytest.raises(so.ParameterError, match="2 joint values"):
+        so.ArmProblem(targets, robot, home=so.Joints([0.1, 0.2, 0.3]))
+    with pytest.raises(so.ParameterError, match="finite joint values"):
+        so.Joints([np.nan, 0.0])

@@ -13,7 +13,7 @@ from subtask_opt.arm.poses import make_targets
 from subtask_opt.arm.scene import Scene
 from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
-from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
+from subtask_opt.arm.trajectory import from_serial_report, validate
 from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
 from tests.conftest import size
 
@@ -49,8 +49,8 @@ def test_result_is_consistent_and_executes(solved) -> None:
     assert result.total_time == pytest.approx(result.leg_times.sum())
     assert result.collision_checked
     assert result.counts["legs_checked"] >= n + 1
-    traj = serial_trajectory(problem, result)
-    check = validate_serial_trajectory(traj, result, dt=0.005)
+    traj = from_serial_report(result)
+    check = validate(traj, dt=0.005)
     assert check.ok, check.violations
     assert abs(traj.duration - result.total_time) <= 0.005 * result.total_time
     assert check.max_position_error <= 1e-5 and check.max_axis_error <= 1e-4
@@ -76,7 +76,7 @@ def test_same_seed_same_answer(solved) -> None:
 
 def test_csv_header_and_duration(solved, tmp_path) -> None:
     problem, result = solved
-    traj = serial_trajectory(problem, result)
+    traj = from_serial_report(result)
     path = traj.to_csv(tmp_path / "t.csv", dt=0.05)
     lines = path.read_text().splitlines()
     assert lines[0] == "t,q1,q2,q3,q4,q5,q6,dq1,dq2,dq3,dq4,dq5,dq6,x,y,z"

@@ -12,12 +12,7 @@ import pytest
 from subtask_opt.arm.model import JointLimits, load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
-from subtask_opt.arm.trajectory import (
-    CSV_HEADER,
-    TourTrajectory,
-    tour_trajectory,
-    validate_trajectory,
-)
+from subtask_opt.arm.trajectory import HOME, Trajectory, build_trajectory, validate
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.tour.problem import MatrixProblem
 from tests.conftest import REDUCED, size
@@ -46,8 +41,8 @@ def _solved(robot: str, case: str, model: str):
 @pytest.mark.parametrize("model", ["joint", "line", "trapezoid", "paper"])
 def test_every_tour_executes_within_the_limits(robot: str, case: str, model: str) -> None:
     problem, result = _solved(robot, case, model)
-    trajectory = tour_trajectory(problem, result)
-    report = validate_trajectory(trajectory, dt=2e-3)
+    trajectory = build_trajectory(result)
+    report = validate(trajectory, dt=2e-3)
     assert report.ok, report.violations
     assert max(report.max_velocity_ratio) <= 1 + report.rtol
     if problem.arm.joint_limits.jerk is None:
@@ -67,13 +62,13 @@ def test_every_tour_executes_within_the_limits(robot: str, case: str, model: str
         q, qd, _ = trajectory.states([leg.start])
         np.testing.assert_allclose(q[0], leg.q_from, atol=1e-9)
         np.testing.assert_allclose(qd[0], 0.0, atol=1e-6)
-        np.testing.assert_allclose(_arm(robot).fk(q[0])[:2], pts[leg.from_subtask], atol=1e-9)
-        assert leg.from_config == result.report.configurations[leg.from_subtask]
+        np.testing.assert_allclose(_arm(robot).fk(q[0])[:2], pts[leg.from_stop], atol=1e-9)
+        assert leg.from_config == result.report.configurations[leg.from_stop]
 
 
 def test_joint_moves_are_jerk_limited_when_the_arm_has_jerk_limits() -> None:
     problem, result = _solved("planar_2r", "square20", "joint")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     s = trajectory.sample(1e-3)
     jerk = np.abs(np.diff(s.qdd, axis=0)) / 1e-3
     # finite differences of a piecewise-linear acceleration: at most the jerk limit (+ a step)
@@ -85,7 +80,7 @@ def test_joint_moves_are_jerk_limited_when_the_arm_has_jerk_limits() -> None:
 @pytest.mark.parametrize("robot", ["asr_twodof", "planar_2r"])
 def test_line_legs_follow_the_straight_line_and_are_consistent(robot: str) -> None:
     problem, result = _solved(robot, "random30", "line")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     legs = [leg for leg in trajectory.legs if leg.kind == "line"]
     assert legs
     arm = problem.arm
@@ -96,7 +91,7 @@ def test_line_legs_follow_the_straight_line_and_are_consistent(robot: str) -> No
         t = np.linspace(0.0, leg.duration, samples)
         q, qd, qdd = leg.states(t)
         xy = np.array([arm.fk(qk)[:2] for qk in q])
-        a, b = pts[leg.from_subtask], pts[leg.to_subtask]
+        a, b = pts[leg.from_stop], pts[leg.to_stop]
         u = (b - a) / np.linalg.norm(b - a)
         offset = (xy - a) @ np.array([-u[1], u[0]])
         assert np.abs(offset).max() < 1e-9  # on the line
@@ -116,16 +111,16 @@ def test_line_legs_follow_the_straight_line_and_are_consistent(robot: str) -> No
 
 def test_sampling_and_csv(tmp_path) -> None:
     problem, result = _solved("planar_2r", "square20", "line")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     s = trajectory.sample(0.05)
     assert s.t[0] == 0.0 and s.t[-1] == pytest.approx(trajectory.duration)
     assert np.all(np.diff(s.t) > 0)
     path = trajectory.to_csv(tmp_path / "traj.csv", dt=0.05)
     lines = path.read_text().splitlines()
-    assert lines[0] == CSV_HEADER == "t,q1,q2,dq1,dq2,x,y"
+    assert lines[0] == "t,q1,q2,dq1,dq2,x,y"
     table = np.loadtxt(path, delimiter=",", skiprows=1)
     assert table.shape == (len(s.t), 7)
-    np.testing.assert_allclose(table[:, 5:], s.xy, atol=1e-8)
+    np.testing.assert_allclose(table[:, 5:], s.tool, atol=1e-8)
     q, qd, qdd = trajectory.at_time(trajectory.duration)
     np.testing.assert_allclose(q, trajectory.legs[0].q_from, atol=1e-9)  # closed tour
 
@@ -133,11 +128,11 @@ def test_sampling_and_csv(tmp_path) -> None:
 @pytest.mark.parametrize("dt", [0.0, -0.1, float("nan")])
 def test_non_positive_dt_is_rejected(dt: float) -> None:
     problem, result = _solved("planar_2r", "square20", "joint")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     with pytest.raises(ParameterError, match="dt"):
         trajectory.sample(dt)
     with pytest.raises(ParameterError, match="dt"):
-        validate_trajectory(trajectory, dt=dt)
+        validate(trajectory, dt=dt)
 
 
 def test_validator_catches_the_jerk_of_an_acceleration_limited_tour() -> None:
@@ -151,16 +146,16 @@ def test_validator_catches_the_jerk_of_an_acceleration_limited_tour() -> None:
     free_problem = PlanarProblem(problem.subtasks, free, time_model="line",
                                  configurations="optimize")
     free_result = solve(free_problem, seed=0)
-    jerky = tour_trajectory(free_problem, free_result)
-    judged = TourTrajectory(arm, jerky.legs, jerky.predicted_time, "line")
-    report = validate_trajectory(judged, dt=1e-3)
+    jerky = build_trajectory(free_result)
+    judged = Trajectory(arm, jerky.legs, jerky.predicted_time, "line")
+    report = validate(judged, dt=1e-3)
     assert not report.ok
     assert any(v.startswith("jerk limit exceeded") for v in report.violations)
     assert report.max_jerk_ratio is not None and max(report.max_jerk_ratio) > 10
-    smooth = validate_trajectory(tour_trajectory(problem, result), dt=1e-3)
+    smooth = validate(build_trajectory(result), dt=1e-3)
     assert smooth.ok, smooth.violations
     # honouring jerk costs time
-    assert tour_trajectory(problem, result).duration > jerky.duration
+    assert build_trajectory(result).duration > jerky.duration
 
 
 @pytest.mark.parametrize("dt", [1e-9, 1e-7, 11.0])
@@ -168,19 +163,19 @@ def test_sampling_step_outside_the_range_is_rejected_before_allocating(dt: float
     from subtask_opt.arm.trajectory import MAX_DT, MIN_DT
 
     problem, result = _solved("asr_twodof", "square20", "joint")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     with pytest.raises(ParameterError, match=r"dt must be in \[") as err:
         trajectory.sample(dt)
     assert f"{MIN_DT:g}" in str(err.value) and f"{MAX_DT:g}" in str(err.value)
     with pytest.raises(ParameterError, match="dt"):
-        validate_trajectory(trajectory, dt=dt)
+        validate(trajectory, dt=dt)
 
 
 def test_too_many_samples_are_refused_with_the_estimate(monkeypatch) -> None:
     from subtask_opt.arm import trajectory as tr
 
     problem, result = _solved("asr_twodof", "square20", "joint")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     monkeypatch.setattr(tr, "MAX_SAMPLES", 1000)
     dt = trajectory.duration / 5000  # about 5000 samples
     with pytest.raises(ParameterError, match="limit of 1e[+]03") as err:
@@ -193,19 +188,19 @@ def test_too_many_samples_are_refused_with_the_estimate(monkeypatch) -> None:
 
 def test_validator_reports_exceeded_limits() -> None:
     problem, result = _solved("asr_twodof", "square20", "joint")
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     jl = trajectory.arm.joint_limits
     slower = load_planar_arm("asr_twodof", joint_limits=JointLimits(
         jl.lower, jl.upper, jl.velocity / 2, jl.acceleration / 2))
-    strict = TourTrajectory(slower, trajectory.legs, trajectory.predicted_time, "joint")
-    report = validate_trajectory(strict, dt=5e-3)
+    strict = Trajectory(slower, trajectory.legs, trajectory.predicted_time, "joint")
+    report = validate(strict, dt=5e-3)
     assert not report.ok
     text = " ".join(report.violations)
     assert "velocity limit exceeded" in text and "acceleration limit exceeded" in text
     assert "INVALID" in report.summary()
     narrow = load_planar_arm("asr_twodof", joint_limits=JointLimits(
         jl.lower / 10, jl.upper / 10, jl.velocity, jl.acceleration))
-    report = validate_trajectory(TourTrajectory(narrow, trajectory.legs, 1.0, "joint"), dt=5e-3)
+    report = validate(Trajectory(narrow, trajectory.legs, 1.0, "joint"), dt=5e-3)
     assert any("position limit" in v for v in report.violations)
 
 
@@ -213,7 +208,9 @@ def test_trajectory_needs_an_arm() -> None:
     problem = MatrixProblem(np.ones((4, 4)) - np.eye(4))
     result = solve(problem, seed=0)
     with pytest.raises(ParameterError, match="arm"):
-        tour_trajectory(problem, result)
+        build_trajectory(result)
+    with pytest.raises(ParameterError, match="trajectory"):
+        validate(result)
 
 
 def test_figures_and_animation(tmp_path) -> None:
@@ -227,7 +224,7 @@ def test_figures_and_animation(tmp_path) -> None:
     problem = PlanarProblem(random_subtasks(arm, 6, seed=0), arm, time_model="line",
                             configurations="optimize")
     result = solve(problem, seed=0)
-    trajectory = tour_trajectory(problem, result)
+    trajectory = build_trajectory(result)
     fig = plot_joint_profiles(trajectory)
     assert len(fig.axes) == 3
     ax = plot_executed_path(problem, trajectory)
@@ -315,3 +312,37 @@ def test_solution_figure(tmp_path, n: int) -> None:
     plt.close(fig)
     out = save_solution_figure(result, problem, tmp_path / "fig.png")
     assert out.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("tour", ["closed", "open"])
+@pytest.mark.parametrize("home", [None, (0.35, 0.2)])
+def test_open_tours_and_home_points_execute(tour: str, home) -> None:
+    """A planar tour from a home point, closed or open: one leg per move the search timed,
+    from the home (first stop) to the last target (open) or back to the start."""
+    import subtask_opt as so
+    from subtask_opt.tour.constraints import TourConstraints
+
+    robot = so.load_robot("planar_2r")
+    targets = random_subtasks(robot.model, 6, seed=4)
+    result = so.solve(so.ArmProblem(targets, robot, home=home), seed=0,
+                      constraints=TourConstraints(tour=tour))
+    trajectory = so.trajectory(result)
+    n = len(result.order)
+    moves = n - (tour == "open") + (home is not None)
+    assert len(trajectory.legs) == moves == len(result.leg_times)
+    stops = [leg.from_stop for leg in trajectory.legs] + [trajectory.legs[-1].to_stop]
+    inner = [int(i) for i in result.order]
+    expected = ([HOME] if home is not None else []) + inner
+    if tour == "closed":
+        expected.append(expected[0])
+    assert stops == expected
+    if home is not None:  # the tip starts (and, closed, ends) at the home point
+        tip = trajectory.tool_positions(trajectory.states([0.0, trajectory.duration])[0])
+        np.testing.assert_allclose(tip[0], home, atol=1e-9)
+        if tour == "closed":
+            np.testing.assert_allclose(tip[1], home, atol=1e-9)
+    np.testing.assert_allclose([leg.duration for leg in trajectory.legs], result.leg_times,
+                               rtol=1e-6)
+    check = so.validate(trajectory)
+    assert check.ok, check.violations
+    assert check.max_position_error < 1e-9 and check.max_axis_error is None

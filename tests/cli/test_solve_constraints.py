@@ -63,11 +63,10 @@ def _one_error_line(capsys) -> str:
     ("1;2\n", [], "line 1: expected 'a,b'"),
     ("3,0\n", [], "before the start 0"),
     ("", ["--end", "3"], "end=3 needs tour='open'"),
-    ("", ["--tour", "open", "--home", "0.3,0.3"], "home needs tour='closed'"),
     ("", ["--home", "9,9"], "home point (9, 9) is unreachable: is beyond the reach"),
     ("", ["--home", "0.3,0.3", "--first", "2"], "first=2 and a home contradict"),
     ("", ["--home", "1,2,3"], "--home takes a point X,Y"),
-    ("", ["--tour", "open", "--plot", "x.png"], "--plot draw closed tours"),
+    ("", ["--tour", "open", "--plot", "x.png"], "--plot draws closed tours"),
 ])
 def test_bad_shape_input_is_one_line_and_exit_2(tmp_path, capsys, lines, args,
                                                 message) -> None:

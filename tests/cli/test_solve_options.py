@@ -27,7 +27,8 @@ SAMPLE = {  # a valid value of every option that takes one
     "standoff": "0.01", "axis_step": "90", "tool_frame": "tool0", "limits": "{dir}/lim.json",
     "view": "{dir}/v.html",
 }
-BOTH = {"case", "robot", "time_model", "first", "tour", "end", "home", "precedence", "preset",
+BOTH = {"case", "robot", "time_model", "first", "tour", "end", "home", "home_joints",
+        "precedence", "preset",
         "seed", "runs", "certify", "certify_time_limit", "vmax", "amax", "jmax",
         "speed_scale", "accel_scale", "max_generations", "max_runtime", "no_improvement",
         "target", "json", "plot", "trajectory", "dt", "quiet", "no_progress"}
@@ -95,6 +96,18 @@ def test_shape_options_are_honoured_on_both_kinds(kind, files, tmp_path) -> None
     closed = _json([*base, "--end", "2", "--seed", "1"] + (
         ["--home", "0.3,0.3"] if kind == PLANAR else []), files["dir"])
     assert closed["order"][-1] == 2
+
+
+@pytest.mark.parametrize("kind", [PLANAR, SERIAL])
+def test_a_home_configuration_is_honoured_on_both_kinds(kind, files, tmp_path) -> None:
+    """--home-joints: the trajectory starts in that configuration on every robot."""
+    csv = tmp_path / "t.csv"
+    joints = "30,-60" if kind == PLANAR else "0,-90,90,-90,-90,0"
+    base = [a for a in _base(kind, files) if a not in ("--home", "0,-90,90,-90,-90,0")]
+    _json([*base, "--home-joints", joints, "--trajectory", str(csv)], files["dir"])
+    first = np.loadtxt(csv, delimiter=",", skiprows=1)[0]
+    q = np.radians([float(v) for v in joints.split(",")])
+    np.testing.assert_allclose(first[1:1 + q.size], q, atol=1e-9)
 
 
 @pytest.mark.parametrize("kind", [PLANAR, SERIAL])

@@ -26,7 +26,7 @@ from subtask_opt.tour.exact import (
 )
 from subtask_opt.tour.problem import MatrixProblem
 
-VARIANTS = ("closed", "open_free", "open_fixed", "home")
+VARIANTS = ("closed", "open_free", "open_fixed", "home", "open_home")
 
 
 @dataclass(frozen=True)
@@ -51,8 +51,10 @@ def random_instance(seed: int, n_low: int = 4, n_high: int = 10) -> Instance:
     home = None
     if variant == "open_fixed":
         end = int((start + 1 + rng.integers(0, n - 1)) % n)
-    if variant == "home":
+    if variant in ("home", "open_home"):
         home, start = start, None
+    if variant == "open_home" and rng.random() < 0.5:  # an open path from home to a set end
+        end = int((home + 1 + rng.integers(0, n - 1)) % n)
     # a random DAG: pairs that follow a random ranking, never into the start, out of the
     # end, or touching the home
     rank = rng.permutation(n)
@@ -83,7 +85,7 @@ def brute_force(m: np.ndarray, c: TourConstraints) -> float:
             continue
         cost = sum(m[perm[k], perm[k + 1]] for k in range(len(perm) - 1))
         if home is not None:
-            cost += m[home, perm[0]] + m[perm[-1], home]
+            cost += m[home, perm[0]] + (m[perm[-1], home] if c.tour == "closed" else 0.0)
         elif c.tour == "closed":
             cost += m[perm[-1], perm[0]]
         best = min(best, cost)
@@ -95,7 +97,8 @@ def user_cost(m: np.ndarray, c: TourConstraints, order: np.ndarray) -> float:
     o = [int(v) for v in order]
     cost = sum(m[o[k], o[k + 1]] for k in range(len(o) - 1))
     if isinstance(c.home, int):
-        return float(cost + m[c.home, o[0]] + m[o[-1], c.home])
+        back = m[o[-1], c.home] if c.tour == "closed" else 0.0
+        return float(cost + m[c.home, o[0]] + back)
     return float(cost + (m[o[-1], o[0]] if c.tour == "closed" else 0.0))
 
 
@@ -161,6 +164,9 @@ def test_leg_counts_follow_the_shape() -> None:
     closed = solve(MatrixProblem(m), seed=0, constraints=TourConstraints(start=2))
     open_ = solve(MatrixProblem(m), seed=0, constraints=TourConstraints(tour="open", start=2))
     home = solve(MatrixProblem(m), seed=0, constraints=TourConstraints(home=2))
+    away = solve(MatrixProblem(m), seed=0, constraints=TourConstraints(tour="open", home=2))
+    assert len(away.order) == n - 1 and 2 not in away.order and len(away.leg_times) == n - 1
+    assert away.leg_times[0] == m[2, away.order[0]]
     assert len(closed.leg_times) == n and closed.order[0] == 2
     assert len(open_.leg_times) == n - 1 and open_.order[0] == 2
     assert len(home.order) == n - 1 and 2 not in home.order and len(home.leg_times) == n
@@ -178,7 +184,7 @@ def test_larger_answers_keep_every_constraint(seed: int, n: int, variant: str,
     np.fill_diagonal(m, 0.0)
     start = int(rng.integers(0, n))
     end = int((start + 1 + rng.integers(0, n - 1)) % n) if variant == "open_fixed" else None
-    home = start if variant == "home" else None
+    home = start if variant in ("home", "open_home") else None
     if home is not None:
         start = None  # type: ignore[assignment]
     rank = rng.permutation(n).tolist()
@@ -305,7 +311,6 @@ def test_a_closed_tour_ends_at_a_chosen_subtask_only_before_a_home() -> None:
 @pytest.mark.parametrize(("kwargs", "message"), [
     ({"tour": "circle"}, "tour must be one of closed, open"),
     ({"tour": "open", "start": 2, "end": 2}, "from subtask 2 to itself"),
-    ({"tour": "open", "home": 1}, "home needs tour='closed'"),
     ({"home": 1, "start": 2}, "home and start=2 contradict"),
     ({"start": -1}, "start must be a non-negative integer"),
     ({"precedence": [(1, 1)]}, "subtask 1 before itself"),

@@ -30,7 +30,7 @@ Four models (:data:`TIME_MODELS`):
     averaged over a window of width tau (continuous acceleration) and slowed
     down uniformly by lambda until every velocity, acceleration and jerk limit
     holds; its time lambda (T + tau), with tau searched per leg, is exactly what
-    :func:`subtask_opt.arm.trajectory.tour_trajectory` executes. Not the
+    :func:`subtask_opt.arm.trajectory.build_trajectory` executes. Not the
     jerk-limited optimum, but a feasible profile and its honest time.
 
 For ``joint`` and ``line`` the result also holds the times between every pair

@@ -18,7 +18,7 @@ needs_data = pytest.mark.skipif(not (DATA / "targets.csv").is_file(),
     ("kicks", -1, r"kicks must be an integer in \[0, 1000\], got -1"),
 ])
 def test_bad_search_options_name_the_value(option, value, message) -> None:
-    from subtask_opt.arm.robotsp_bench import run
+    from subtask_opt.papers.robotsp import run
 
     with pytest.raises(ParameterError, match=message):
         run(DATA, sizes=[25], peers=(), **{option: value})
@@ -27,7 +27,7 @@ def test_bad_search_options_name_the_value(option, value, message) -> None:
 @pytest.mark.bench
 @needs_data
 def test_short_search_is_recorded_and_valid() -> None:
-    from subtask_opt.arm.robotsp_bench import run, table
+    from subtask_opt.papers.robotsp import run, table
 
     report = run(DATA, sizes=[25], peers=(), stall=1, kicks=0)
     ours = report["subsets"]["25"]["methods"]["ours"]

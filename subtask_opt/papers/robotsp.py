@@ -16,7 +16,7 @@ per subset (IK, collision filter, leg matrix) is shared by every method:
 The three peers come from :mod:`subtask_opt.tour.peers` (imported lazily; a
 missing module or function is reported, not faked). Every answer is executed
 with the same ruckig legs and validated
-(:func:`~subtask_opt.arm.serial_trajectory.validate_serial_trajectory`). Our
+(:func:`~subtask_opt.arm.trajectory.validate`). Our
 legs are swept for collisions and avoided; the peers' legs are straight joint
 moves whose collisions are only counted (RoboTSP plans such legs with BiRRT).
 RoboTSP's published figures (``published.json``) are printed beside ours as
@@ -102,8 +102,8 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
         evaluate_tour,
         solve_serial_problem,
     )
-    from subtask_opt.arm.serial_trajectory import serial_trajectory, validate_serial_trajectory
     from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
+    from subtask_opt.arm.trajectory import from_serial_report, validate
     from subtask_opt.tour.solve import SolverParams
 
     stop: list[StoppingCriterion] | None = None
@@ -127,8 +127,8 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
                            "methods": {}}
 
     def record(name: str, result: Any, cpu: dict[str, float]) -> None:
-        traj = serial_trajectory(problem, result)
-        check = validate_serial_trajectory(traj, result, dt=validate_dt)
+        traj = from_serial_report(result)
+        check = validate(traj, dt=validate_dt)
         out["methods"][name] = {
             "executed_time_s": traj.duration, "valid": check.ok,
             "violations": list(check.violations),

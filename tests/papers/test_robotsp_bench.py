@@ -16,7 +16,7 @@ def test_robotsp_25_holes_valid_and_beats_the_stand_in() -> None:
     import sys
     from pathlib import Path
 
-    from subtask_opt.arm.robotsp_bench import run
+    from subtask_opt.papers.robotsp import run
 
     spec = importlib.util.spec_from_file_location(
         "robotsp_script", Path(__file__).resolve().parents[2] / "benchmarks" / "robotsp.py")
@@ -36,8 +36,8 @@ def test_robotsp_25_holes_valid_and_beats_the_stand_in() -> None:
 def test_bad_search_settings_are_refused_before_any_work(tmp_path, option, value) -> None:
     import numpy as np
 
-    from subtask_opt.arm.robotsp_bench import run_subset
     from subtask_opt.base.errors import ParameterError
+    from subtask_opt.papers.robotsp import run_subset
 
     with pytest.raises(ParameterError, match=rf"{option} must be an integer in .*got {value}"):
         run_subset(np.zeros((0, 6)), [], data_dir=tmp_path, **{option: value})
