@@ -10,9 +10,9 @@ serial arms (a UR5 in its box cell, the VS060 on RoboTSP's drilling subset when
 ``*seconds``, ``*_ms``, ``compile*``, ``cpu*``) are dropped before comparing.
 
 Every command but a serial arm's must give equal values for every key the older recording
-has (keys added since are listed, not failed). A serial arm's answer must be equal *or
-better*: its executed ``total_time`` no longer than before (the search of serial arms is
-being reworked, so its tours may change).
+has, nested keys included (keys added since are listed, not failed). A serial arm's
+answer must be equal *or better*: its executed ``total_time`` no longer than before (the
+search and the joint model of serial arms were reworked, so their tours may change).
 """
 
 from __future__ import annotations
@@ -116,6 +116,23 @@ def record(out: Path, only: str | None = None) -> int:
     return failures
 
 
+def _differences(old: object, new: object, where: str = "") -> tuple[list[str], list[str]]:
+    """(keys of ``old`` whose values ``new`` changes, keys ``new`` adds), nested keys
+    dotted: a dict is compared key by key, anything else by equality."""
+    if not (isinstance(old, dict) and isinstance(new, dict)):
+        return ([where or "(value)"] if old != new else []), []
+    changed: list[str] = []
+    added = [f"{where}{k}" for k in new if k not in old]
+    for k, v in old.items():
+        if k not in new:
+            changed.append(f"{where}{k}")
+            continue
+        c, a = _differences(v, new[k], f"{where}{k}.")
+        changed += [x.rstrip(".") for x in c]
+        added += a
+    return sorted(changed), sorted(added)
+
+
 def compare(a: Path, b: Path) -> int:
     """Compare recording ``b`` (after) with ``a`` (before); 1 when an answer got worse."""
     differing = 0
@@ -133,8 +150,7 @@ def compare(a: Path, b: Path) -> int:
             print(f"{name}: {verdict} ({before:.6f} -> {after:.6f} s)")
             differing += verdict == "WORSE"
             continue
-        changed = sorted(k for k in ja if k not in jb or ja[k] != jb[k])
-        added = sorted(k for k in jb if k not in ja) if isinstance(jb, dict) else []
+        changed, added = _differences(ja, jb)
         if changed:
             differing += 1
             print(f"{name}: differs in {', '.join(changed)}")

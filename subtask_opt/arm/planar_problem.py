@@ -226,7 +226,8 @@ def solve(problem: PlanarProblem | MatrixProblem | ClusteredProblem, *, seed: in
                else np.asarray(searched.timing.configurations))
     tour = (np.concatenate([[searched.size - 1], result.order]) if shaped.home is not None
             else result.order)
-    report = tour_report(searched, tour, configs, result.leg_times)
+    report = tour_report(searched, tour, configs, result.leg_times,
+                         home=searched.size - 1 if shaped.home is not None else None)
     timing = searched.timing
     if timing.branch_joints is None:
         joints = np.asarray(timing.joint_positions)[:problem.size]

@@ -41,9 +41,51 @@ class TourLeg:
     """Cartesian models: the joint speed ratio of the straight line, when > 1."""
 
 
+class ArmReport:
+    """What a tour means for the arm, the same for every robot (``Result.report``).
+
+    Every report has ``robot``, ``time_model``, ``configurations_mode``, ``legs`` (one
+    :class:`TourLeg` per leg driven, in order; a home is stop -1) and ``problem`` (the
+    compiled problem, for :func:`subtask_opt.trajectory`), and gives the summary's lines
+    (:meth:`header`, :meth:`order_lines`), a per-leg table, a warning line or None, and
+    its JSON (:meth:`to_dict`, whose first keys are the same for every robot:
+    :meth:`common_dict`). :class:`TourReport` is a planar arm's, ``SerialReport``
+    (:mod:`subtask_opt.arm.serial_problem`) a serial arm's.
+    """
+
+    robot: str
+    time_model: str
+    configurations_mode: str
+    problem: Any
+    legs: tuple[TourLeg, ...]
+
+    @property
+    def infeasible(self) -> tuple[TourLeg, ...]:
+        """Legs the arm cannot drive as the model promised."""
+        return tuple(leg for leg in self.legs if leg.infeasible_line or leg.overspeed > 1.0)
+
+    def common_dict(self) -> dict[str, Any]:
+        """The JSON keys every robot's report has: who, which model, and every leg."""
+        return {
+            "robot": self.robot,
+            "time_model": self.time_model,
+            "configurations_mode": self.configurations_mode,
+            "legs": [{"leg": leg.index, "from": leg.start, "to": leg.end,
+                      "configurations": list(leg.configurations), "distance": leg.distance,
+                      "time": leg.time, "move": leg.move, "notes": list(leg.notes)}
+                     for leg in self.legs],
+            "infeasible_legs": [
+                {"leg": leg.index, "from": leg.start, "to": leg.end,
+                 "reason": "; ".join(leg.notes) or "straight line over a joint limit",
+                 **({"speed_ratio": leg.overspeed} if leg.overspeed > 1.0 else {})}
+                for leg in self.infeasible],
+        }
+
+
 @dataclass(frozen=True)
-class TourReport:
-    """The arm's view of a tour (only the tour's legs; all-pairs figures in ``diagnostics``)."""
+class TourReport(ArmReport):
+    """A planar arm's view of a tour (only the tour's legs; all-pairs figures in
+    ``diagnostics``)."""
 
     robot: str
     time_model: str
@@ -62,11 +104,6 @@ class TourReport:
     def configuration_changes(self) -> int:
         """Legs whose two ends use different elbow configurations."""
         return sum(leg.configurations[0] != leg.configurations[1] for leg in self.legs)
-
-    @property
-    def infeasible(self) -> tuple[TourLeg, ...]:
-        """Legs whose straight line the arm cannot drive as promised."""
-        return tuple(leg for leg in self.legs if leg.infeasible_line or leg.overspeed > 1.0)
 
     def leg_counts(self) -> dict[str, Any] | None:
         """(Cartesian models) how many of the tour's straight legs the arm cannot drive:
@@ -109,7 +146,8 @@ class TourReport:
         for leg in self.legs:
             ca, cb = leg.configurations
             elbow = BRANCH_LETTERS[ca] + ("->" + BRANCH_LETTERS[cb] if ca != cb else "")
-            rows.append(f"{leg.index:>4} {leg.start:>5} {leg.end:>5} {elbow:>6} "
+            start, end = ("home" if v < 0 else str(v) for v in (leg.start, leg.end))
+            rows.append(f"{leg.index:>4} {start:>5} {end:>5} {elbow:>6} "
                         f"{leg.distance:>9.4f} {leg.time:>9.4f} {leg.move:>5}  "
                         f"{', '.join(leg.notes)}")
         return "\n".join(rows)
@@ -117,26 +155,20 @@ class TourReport:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the tour's legs, configurations and infeasible legs; diagnostics apart."""
         return {
-            "robot": self.robot,
-            "time_model": self.time_model,
-            "configurations_mode": self.configurations_mode,
+            **self.common_dict(),
             "configurations": [int(c) for c in self.configurations],
             "leg_moves": list(self.leg_moves),
-            "infeasible_legs": [
-                {"leg": leg.index, "from": leg.start, "to": leg.end,
-                 "reason": "; ".join(leg.notes) or "straight line over a joint limit",
-                 **({"speed_ratio": leg.overspeed} if leg.overspeed > 1.0 else {})}
-                for leg in self.infeasible],
             "tour_leg_check": self.leg_counts(),
             "diagnostics": self.diagnostics,
         }
 
 
 def tour_report(problem: PlanarProblem, order: np.ndarray, configurations: np.ndarray,
-                leg_times: np.ndarray) -> TourReport:
+                leg_times: np.ndarray, home: int | None = None) -> TourReport:
     """The report of the tour ``order`` at ``configurations`` (by subtask index): its
     ``len(leg_times)`` legs, ``order[k] -> order[k + 1]`` (a closed tour's last one back
-    to ``order[0]``; an open path has one leg fewer)."""
+    to ``order[0]``; an open path has one leg fewer). ``home``: the subtask that is the
+    home point, stop -1 in the legs."""
     timing = problem.timing
     check = timing.leg_check
     points = problem.subtasks.points
@@ -167,8 +199,9 @@ def tour_report(problem: PlanarProblem, order: np.ndarray, configurations: np.nd
                 infeasible = True
                 notes.append(f"line infeasible ({why})")
         move = {0: "joint", 1: "line"}[int(moves[a, b])] if moves is not None else "line"
-        legs.append(TourLeg(i, a, b, (ca, cb), float(np.hypot(*(points[a] - points[b]))),
-                            float(leg_times[i]), move, tuple(notes), infeasible, overspeed))
+        legs.append(TourLeg(i, -1 if a == home else a, -1 if b == home else b, (ca, cb),
+                            float(np.hypot(*(points[a] - points[b]))), float(leg_times[i]),
+                            move, tuple(notes), infeasible, overspeed))
     diagnostics: dict[str, Any] = {}
     if check is not None and problem.check_all_legs:
         diagnostics["all_pairs_leg_check"] = check.to_dict()

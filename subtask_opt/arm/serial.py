@@ -366,7 +366,13 @@ def load_serial_arm(name_or_urdf: str | Path, *, tool_frame: str | None = None,
     elif text.lower().endswith(".urdf") or Path(text).is_file():
         urdf = Path(text)
         params_path = urdf.with_suffix(".json")
+        # package:// URIs resolve in the URDF's folder, or in the installed robot
+        # descriptions of example-robot-data (a copied UR or Panda URDF keeps its meshes)
         package_dirs = [str(urdf.parent)]
+        try:
+            package_dirs.append(str(example_robot_data_share()))
+        except InputDataError:
+            pass
         name = urdf.stem
     else:
         raise ParameterError(f"unknown robot {text!r}: expected one of "

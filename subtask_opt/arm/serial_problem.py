@@ -3,9 +3,9 @@
 A :class:`SerialProblem` is built once: every IK solution of every target
 (configurations in collision with the scene or the arm itself dropped), then
 the matrix of joint-space leg times between all configurations and the home
-configuration (the joint model: every joint on the straight joint-space line, time-optimal
-under the velocity, acceleration and, where the arm has them, jerk limits,
-:func:`~subtask_opt.arm.timing.joint_legs.trapezoid_leg_times`).
+configuration (the joint model: every joint time-optimal under its velocity,
+acceleration and, where the arm has them, jerk limits, all starting and stopping
+together, :func:`~subtask_opt.arm.timing.joint_legs.joint_leg_times`).
 :func:`solve_serial_problem` searches the order and one configuration per target
 together (a generalised TSP on the shared micro-GA core, decoded exactly by a
 layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
@@ -21,8 +21,9 @@ once more knowing those legs and the shorter answer is kept
 (``legs_detoured`` is always 0).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
-ruckig's time-optimal synchronised profiles with the arm's jerk limits for
-the chosen legs, equal to the planned times to round-off.
+ruckig's time-optimal, time-synchronised profiles with the arm's jerk limits for
+the chosen legs (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`), equal to the
+planned times to round-off.
 """
 
 from __future__ import annotations
@@ -38,12 +39,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from subtask_opt._kernel_cache import compile_seconds
+from subtask_opt.arm.report import ArmReport, TourLeg
 from subtask_opt.arm.timing.joint_legs import (
     JointLimits,
+    joint_leg_square,
+    joint_leg_times,
     joint_limits,
     ruckig_leg_time,
-    trapezoid_leg_times,
-    trapezoid_square,
 )
 from subtask_opt.base.errors import (
     InputDataError,
@@ -225,9 +227,9 @@ class SerialProblem:
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         flat = np.ascontiguousarray(np.vstack(configs))
         with _phase(cpu, "matrix"):
-            memory = trapezoid_square(flat, self.limits)
+            memory = joint_leg_square(flat, self.limits)
             legs = memory.view()
-            home_out = trapezoid_leg_times(home, flat, self.limits)[0]
+            home_out = joint_leg_times(home, flat, self.limits)[0]
             home_in = home_out.copy()  # a leg takes as long either way
             dist, cheapest, top = _gc.block_minima(memory, offsets)
         penalty = (len(configs) + 2) * max(float(top), float(home_out.max())) + 1.0
@@ -258,9 +260,10 @@ def _self_checker(arm: SerialArm) -> CollisionChecker:
 
 
 @dataclass(frozen=True, eq=False)
-class SerialReport:
+class SerialReport(ArmReport):
     """What a serial arm's tour means for the arm (``Result.report``,
-    :func:`solve_serial_problem`).
+    :func:`solve_serial_problem`; the :class:`~subtask_opt.arm.report.ArmReport` of every
+    robot, with its ``legs`` built from the arrays below).
 
     Attributes:
         order: (N,) target indices in visiting order (home before the first, after the last).
@@ -300,9 +303,26 @@ class SerialReport:
     open_path: bool = False
     problem: Any = field(default=None, repr=False, compare=False)
 
+    time_model = "joint"
+    configurations_mode = "optimize"  # one of every target's IK solutions, chosen
+
     @property
-    def robot(self) -> str:
+    def robot(self) -> str:  # type: ignore[override]
         return str(self.problem.arm.name) if self.problem is not None else "?"
+
+    @property
+    def legs(self) -> tuple[TourLeg, ...]:  # type: ignore[override]
+        """The driven legs (the home is stop -1): executed times, distances between the
+        tool points (m), configuration indices at both ends (0 at the home)."""
+        stops = [-1] + [int(i) for i in self.order] + ([] if self.open_path else [-1])
+        index = [0 if k < 0 else int(self.configuration_index[k]) for k in stops]
+        path = self.tour_configurations()
+        tips = np.array([self.problem.arm.fk(q)[:3, 3] for q in path]) if (
+            self.problem is not None) else np.zeros((len(path), 3))
+        return tuple(TourLeg(k, stops[k], stops[k + 1], (index[k], index[k + 1]),
+                             float(np.linalg.norm(tips[k + 1] - tips[k])),
+                             float(self.leg_times[k]), "joint")
+                     for k in range(len(stops) - 1))
 
     def header(self, n: int) -> str:
         """The summary's first line for ``n`` targets."""
@@ -346,26 +366,10 @@ class SerialReport:
         return np.vstack([self.home, self.configurations[self.order]]
                          + ([] if self.open_path else [self.home]))
 
-    def summary(self) -> str:
-        """A few lines for a terminal."""
-        c = self.counts
-        cpu = ", ".join(f"{k} {v:.3f} s" for k, v in self.cpu.items())
-        return "\n".join([
-            f"{c['targets']} targets, {sum(c['configurations_per_target'])} configurations "
-            f"({min(c['configurations_per_target'])}-{max(c['configurations_per_target'])} "
-            f"per target), seed {self.seed}",
-            f"total time {self.total_time:.4f} s executed (ruckig), "
-            f"{self.planned_time:.4f} s planned",
-            f"legs checked {c['legs_checked']}, infeasible {c['legs_infeasible']}, "
-            f"detoured {c['legs_detoured']}" + ("" if self.collision_checked
-                                                 else " (collisions not checked)"),
-            f"CPU: {cpu}",
-            "order: " + " ".join(str(int(i)) for i in self.order),
-        ])
-
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (the CLI's ``--json``); joint values in radians."""
         return {
+            **self.common_dict(),
             "order": [int(i) for i in self.order],
             "configurations": self.configurations.tolist(),
             "configuration_index": [int(i) for i in self.configuration_index],
@@ -790,7 +794,7 @@ def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray,
     chosen = np.array([problem.configurations[i][choice[i]] for i in range(n)])
     path = np.vstack([problem.home, chosen[order]] + ([] if open_path else [problem.home]))
     legs = len(path) - 1
-    planned = np.array([trapezoid_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
+    planned = np.array([joint_leg_times(path[k], path[k + 1], problem.limits)[0, 0]
                         for k in range(legs)])
     lim = problem.arm.limits
     executed = np.array([ruckig_leg_time(path[k], path[k + 1], lim.velocity,

@@ -5,11 +5,10 @@
 rest-to-rest legs through the stops of the tour (the home first and, for a closed tour,
 last; open tours end at their last target), each a :class:`Leg` of
 
-* a joint move: ruckig's time-optimal synchronised profile, jerk-limited when the arm
-  has jerk limits. A planar arm's joints are time-synchronised (each joint its own
-  profile, all ending together: the ``joint`` model's leg time); a serial arm's are also
-  phase-synchronised (the straight joint-space line its collision checker swept:
-  :class:`~subtask_opt.arm.timing.joint_legs.StraightLeg`);
+* a joint move: ruckig's time-optimal, time-synchronised profile (every joint its own
+  profile, all starting and stopping together), jerk-limited when the arm has jerk
+  limits: the ``joint`` model's leg on every robot
+  (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`);
 * (planar arms) a straight line: the time-optimal parameterisation of the line under the
   joint and Cartesian limits (:mod:`subtask_opt.arm.timing._line_kernels`), jerk-limited
   like the ``line`` time model times it.
@@ -43,6 +42,7 @@ import numpy as np
 
 from subtask_opt.arm import _kinematics_kernels as _k
 from subtask_opt.arm.timing import _line_kernels as _lk
+from subtask_opt.arm.timing.joint_legs import joint_move
 from subtask_opt.base.errors import InputDataError, ParameterError, require_positive
 
 # Relative slack of the validator on velocity and acceleration limits: the line
@@ -248,45 +248,6 @@ def _sample_count(owner: str, duration: float, dt: float) -> int:
     return int(math.floor(duration / dt))
 
 
-def _profile_eval(profile: Any, n: int) -> Callable[[np.ndarray], States]:
-    """Vectorised ``at_time`` of a ruckig trajectory (or a StraightLeg) of n joints."""
-    def evaluate(t: np.ndarray) -> States:
-        out = [profile.at_time(float(tk)) for tk in t]
-        return tuple(np.array([o[i] for o in out], dtype=np.float64).reshape(-1, n)
-                     for i in range(3))  # type: ignore[return-value]
-    return evaluate
-
-
-def _still(q: np.ndarray) -> Callable[[np.ndarray], States]:
-    """A leg of zero length: at rest at q."""
-    def evaluate(t: np.ndarray) -> States:
-        return np.tile(q, (len(t), 1)), np.zeros((len(t), q.size)), np.zeros((len(t), q.size))
-    return evaluate
-
-
-def _synchronised(q0: np.ndarray, q1: np.ndarray, lim: Limits) -> tuple[float, Any]:
-    """Ruckig's time-synchronised rest-to-rest move q0 -> q1: (duration, evaluator)."""
-    from ruckig import InputParameter, Result, Ruckig
-    from ruckig import Trajectory as Profile
-
-    n = q0.size
-    otg = Ruckig(n)
-    inp = InputParameter(n)
-    inp.current_position = q0.tolist()
-    inp.target_position = q1.tolist()
-    inp.current_velocity = inp.current_acceleration = [0.0] * n
-    inp.target_velocity = inp.target_acceleration = [0.0] * n
-    inp.max_velocity = lim.velocity.tolist()
-    inp.max_acceleration = lim.acceleration.tolist()
-    inp.max_jerk = [math.inf] * n if lim.jerk is None else lim.jerk.tolist()
-    profile = Profile(n)
-    status = otg.calculate(inp, profile)
-    if status not in (Result.Working, Result.Finished):
-        raise ParameterError(f"ruckig cannot plan the joint move {q0.tolist()} -> "
-                             f"{q1.tolist()}: {status}")
-    return float(profile.duration), _profile_eval(profile, n)
-
-
 def _line_leg(p_from: np.ndarray, p_to: np.ndarray, q_from: np.ndarray, q_to: np.ndarray,
               branch: int, arm: Any, grid: int, reverse: bool) -> Any:
     """Straight line p_from -> p_to as the ``line`` model drives it: (duration, evaluator).
@@ -338,8 +299,6 @@ def build_trajectory(result: Any) -> Trajectory:
 
 def from_serial_report(report: Any) -> Trajectory:
     """Phase-synchronised ruckig legs through the report's configurations from home."""
-    from subtask_opt.arm.timing.joint_legs import ruckig_trajectory
-
     problem = report.problem
     lim = arm_limits(problem.arm)
     path = report.tour_configurations()
@@ -348,15 +307,10 @@ def from_serial_report(report: Any) -> Trajectory:
     legs: list[Leg] = []
     start = 0.0
     for k in range(len(path) - 1):
-        if np.array_equal(path[k], path[k + 1]):
-            duration, ev = 0.0, _still(path[k].copy())
-        else:
-            profile = ruckig_trajectory(path[k], path[k + 1], lim.velocity, lim.acceleration,
-                                        lim.jerk)
-            duration, ev = profile.duration, _profile_eval(profile, path.shape[1])
-        legs.append(Leg(start, duration, "joint", stops[k], stops[k + 1], index[k],
-                        index[k + 1], path[k].copy(), path[k + 1].copy(), ev))
-        start += duration
+        move = joint_move(path[k], path[k + 1], lim.velocity, lim.acceleration, lim.jerk)
+        legs.append(Leg(start, move.duration, "joint", stops[k], stops[k + 1], index[k],
+                        index[k + 1], move.q0, move.q1, move.states))
+        start += move.duration
     return Trajectory(problem.arm, legs, report.planned_time, "joint", problem)
 
 
@@ -398,12 +352,16 @@ def _planar(result: Any, report: Any) -> Trajectory:
             if line is None and moves is not None:
                 raise ParameterError(f"the straight line {i} -> {j} is not feasible for "
                                      f"{arm.name}, but the time model drove it")
-        duration, ev = line if line is not None else _synchronised(
-            np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64), lim)
+        kind = "line"
+        if line is None:
+            kind = "joint"
+            joint = joint_move(q0, q1, lim.velocity, lim.acceleration, lim.jerk)
+            line = joint.duration, joint.states
+        duration, ev = line
         home = problem.size - 1 if homed else None
-        legs.append(Leg(start, duration, "line" if line is not None else "joint",
-                        HOME if i == home else i, HOME if j == home else j, ci, cj,
-                        np.array(q0, dtype=np.float64), np.array(q1, dtype=np.float64), ev))
+        legs.append(Leg(start, duration, kind, HOME if i == home else i,
+                        HOME if j == home else j, ci, cj, np.array(q0, dtype=np.float64),
+                        np.array(q1, dtype=np.float64), ev))
         start += duration
     return Trajectory(arm, legs, result.total_time, problem.time_model, problem)
 

@@ -217,11 +217,11 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         payload = result.to_dict()
         payload["robot"] = robot.name
-        payload["time_model"] = report.to_dict().get("time_model", "joint")
+        payload["time_model"] = report.time_model
         payload["case"] = str(args.case)
         payload["points"] = np.asarray(problem.targets.points).tolist()
-        if executed is not None:
-            payload["trajectory"] = _trajectory_json(*executed)
+        # the same keys for every robot: null when the trajectory was not built
+        payload["trajectory"] = None if executed is None else _trajectory_json(*executed)
         write_json(args.json, payload)
         print(f"wrote {args.json}")
     if not robot.planar and executed is None:

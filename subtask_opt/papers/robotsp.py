@@ -17,8 +17,8 @@ The three peers come from :mod:`subtask_opt.tour.peers` (imported lazily; a
 missing module or function is reported, not faked). Every answer is executed
 with the same ruckig legs and validated
 (:func:`~subtask_opt.arm.trajectory.validate`). Our
-legs are swept for collisions and avoided; the peers' legs are straight joint
-moves whose collisions are only counted (RoboTSP plans such legs with BiRRT).
+legs are swept for collisions and avoided; the peers' legs are the same joint
+moves, whose collisions are only counted (RoboTSP plans such legs with BiRRT).
 RoboTSP's published figures (``published.json``) are printed beside ours as
 context: the robot frames were reconstructed, so absolute times compare only
 loosely.
@@ -102,7 +102,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
         evaluate_tour,
         solve_serial_problem,
     )
-    from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
+    from subtask_opt.arm.timing.joint_legs import joint_leg_times
     from subtask_opt.arm.trajectory import from_serial_report, validate
     from subtask_opt.tour.solve import SolverParams
 
@@ -147,7 +147,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     limits = problem.limits
 
     def leg_time(qa: np.ndarray, qb: np.ndarray) -> np.ndarray:
-        return trapezoid_leg_times(qa, qb, limits)
+        return joint_leg_times(qa, qb, limits)
 
     for name in peers:
         fn = (peer_functions or {}).get(name) or _peer(name)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import subtask_opt as so
-from subtask_opt.arm.timing.joint_legs import trapezoid_leg_times
+from subtask_opt.arm.timing.joint_legs import joint_leg_times
 from subtask_opt.arm.trajectory import HOME as AT_HOME
 from subtask_opt.cli import main
 
@@ -104,9 +104,9 @@ def _brute_force_planned(problem, pairs=(), open_path=False) -> float:
     serial = problem.compiled
     layers = serial.configurations
     lim = serial.limits
-    legs = {(i, j): trapezoid_leg_times(layers[i], layers[j], lim)
+    legs = {(i, j): joint_leg_times(layers[i], layers[j], lim)
             for i in range(len(layers)) for j in range(len(layers)) if i != j}
-    out = [trapezoid_leg_times(serial.home, q, lim)[0] for q in layers]
+    out = [joint_leg_times(serial.home, q, lim)[0] for q in layers]
     best = np.inf
     for order in itertools.permutations(range(len(layers))):
         pos = {t: k for k, t in enumerate(order)}

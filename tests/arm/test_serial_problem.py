@@ -241,13 +241,13 @@ def test_cpu_split_reports_compilation_apart(solved) -> None:
 
 
 def test_the_planned_leg_time_is_the_executed_one_with_jerk_limits() -> None:
-    """The joint model the search optimises is ruckig's jerk-limited straight line (the
-    Panda has jerk limits), not a trapezoid that ignores them."""
+    """The joint model the search optimises is ruckig's jerk-limited time-synchronised
+    move (the Panda has jerk limits), not a trapezoid that ignores them."""
     from subtask_opt.arm.serial import load_serial_arm
     from subtask_opt.arm.timing.joint_legs import (
+        joint_leg_times,
         joint_limits,
         ruckig_leg_time,
-        trapezoid_leg_times,
     )
 
     arm = load_serial_arm("panda")
@@ -257,12 +257,34 @@ def test_the_planned_leg_time_is_the_executed_one_with_jerk_limits() -> None:
     rng = np.random.default_rng(11)
     qa = rng.uniform(lim.lower, lim.upper, (40, 7))
     qb = np.clip(qa + rng.normal(0, 0.4, (40, 7)) * rng.random((40, 1)), lim.lower, lim.upper)
-    planned = np.array([trapezoid_leg_times(a, b, model)[0, 0]
+    planned = np.array([joint_leg_times(a, b, model)[0, 0]
                         for a, b in zip(qa, qb, strict=True)])
     executed = np.array([ruckig_leg_time(a, b, lim.velocity, lim.acceleration, lim.jerk)
                          for a, b in zip(qa, qb, strict=True)])
     np.testing.assert_allclose(planned, executed, rtol=1e-6)
-    without = np.array([trapezoid_leg_times(a, b, joint_limits(lim.velocity,
+    without = np.array([joint_leg_times(a, b, joint_limits(lim.velocity,
                                                                 lim.acceleration))[0, 0]
                         for a, b in zip(qa, qb, strict=True)])
     assert np.all(without <= executed * (1 + 1e-9)) and np.any(without < 0.99 * executed)
+
+
+def test_every_joint_of_an_executed_move_is_monotone_and_on_time() -> None:
+    """What the collision sweep relies on: in ruckig's time-synchronised rest-to-rest move
+    every joint goes from its start to its goal without reversing or overshooting, and the
+    move takes the slowest joint's closed-form time (random limits, with and without jerk)."""
+    from subtask_opt.arm.timing.joint_legs import joint_leg_times, joint_limits, joint_move
+
+    rng = np.random.default_rng(5)
+    for k in range(60):
+        n = int(rng.integers(2, 8))
+        v, a = rng.uniform(0.3, 3.5, n), rng.uniform(0.5, 15.0, n)
+        jerk = rng.uniform(2.0, 300.0, n) if k % 2 else None
+        q0 = rng.uniform(-3, 3, n)
+        q1 = q0 + rng.uniform(-3, 3, n) * (rng.random(n) < 0.8)
+        move = joint_move(q0, q1, v, a, jerk)
+        planned = joint_leg_times(q0, q1, joint_limits(v, a, jerk))[0, 0]
+        assert move.duration == pytest.approx(planned, rel=1e-9, abs=1e-12)
+        q, qd, _ = move.states(np.linspace(0.0, move.duration, 301))
+        towards = np.sign(q1 - q0)
+        assert np.all(qd * towards >= -1e-12)
+        assert np.all((q - q0) * towards >= -1e-12) and np.all((q1 - q) * towards >= -1e-12)

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from subtask_opt.arm.timing.joint_legs import (
+    joint_leg_square,
+    joint_leg_times,
     joint_limits,
     ruckig_leg_time,
-    trapezoid_leg_times,
-    trapezoid_square,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.chromosomes import use
@@ -29,9 +29,9 @@ def _random_instance(rng: np.random.Generator, n: int, kmax: int, n_joints: int 
     offsets = np.concatenate([[0], np.cumsum(counts)])
     lim = joint_limits(rng.uniform(0.5, 2, n_joints), rng.uniform(1, 5, n_joints))
     home = rng.uniform(-3, 3, size=n_joints)
-    legs = trapezoid_leg_times(flat, flat, lim)
-    return flat, offsets, legs, trapezoid_leg_times(home, flat, lim)[0], \
-        trapezoid_leg_times(flat, home, lim)[:, 0]
+    legs = joint_leg_times(flat, flat, lim)
+    return flat, offsets, legs, joint_leg_times(home, flat, lim)[0], \
+        joint_leg_times(flat, home, lim)[:, 0]
 
 
 def _brute_force(offsets, legs, home_out, home_in) -> float:
@@ -244,8 +244,8 @@ def test_block_minima_and_square_legs_match_numpy() -> None:
     rng = np.random.default_rng(3)
     flat, offsets, legs, _, _ = _random_instance(rng, 6, 4)
     lim = joint_limits([1.0, 0.7, 1.57], [5.0, 4.25, 8.0])
-    square = trapezoid_square(flat, lim)
-    assert np.array_equal(square, trapezoid_leg_times(flat, flat, lim))
+    square = joint_leg_square(flat, lim)
+    assert np.array_equal(square, joint_leg_times(flat, flat, lim))
     assert np.array_equal(square, square.T)
     dist, cheapest, top = gc.block_minima(legs, offsets)
     expected = np.minimum.reduceat(np.minimum.reduceat(legs, offsets[:-1], axis=0),
@@ -266,24 +266,22 @@ def test_pack_layers_rejects_bad_offsets() -> None:
 # ---------------------------------------------------------------- leg times
 
 
-def _straight_line_time(dq: np.ndarray, v: np.ndarray, a: np.ndarray) -> float:
-    """Fastest rest-to-rest straight joint line, by bisection on the duration (an oracle).
-
-    A duration T is feasible when the symmetric trapezoid of the path parameter
-    with the smallest peak speed that covers it in T keeps every joint within its limits.
+def _synchronised_time(dq: np.ndarray, v: np.ndarray, a: np.ndarray) -> float:
+    """Fastest rest-to-rest move with every joint starting and stopping together, by
+    bisection on the duration (an oracle): a duration T is feasible when every joint
+    can cover its distance in T with a symmetric trapezoid (or triangle) within its limits.
     """
     d = np.abs(dq)
     if not d.any():
         return 0.0
 
     def feasible(t: float) -> bool:
-        # path parameter 0 -> 1 in time t with acceleration phase tau: peak speed s1 and
-        # acceleration s1 / tau, where 1 = s1 (t - tau); pick the largest feasible tau
-        for tau in np.linspace(1e-9, t / 2, 4001):
-            s1 = 1.0 / (t - tau)
-            if np.all(s1 * d <= v * (1 + 1e-12)) and np.all(s1 / tau * d <= a * (1 + 1e-12)):
-                return True
-        return False
+        # each joint: peak speed s1 after an acceleration phase tau, d = s1 (t - tau);
+        # feasible when some tau keeps s1 <= v and s1 / tau <= a for that joint
+        taus = np.linspace(1e-9, t / 2, 4001)[:, None]
+        s1 = d / (t - taus)
+        ok = (s1 <= v * (1 + 1e-12)) & (s1 / taus <= a * (1 + 1e-12))
+        return bool(ok.any(axis=0).all())
 
     lo, hi = 0.0, 100.0
     for _ in range(50):
@@ -292,16 +290,16 @@ def _straight_line_time(dq: np.ndarray, v: np.ndarray, a: np.ndarray) -> float:
     return hi
 
 
-def test_trapezoid_matrix_matches_a_bisection_oracle() -> None:
+def test_joint_leg_matrix_matches_a_bisection_oracle() -> None:
     rng = np.random.default_rng(0)
     lim = joint_limits([1.0, 0.7, 1.57], [5.0, 4.25, 8.0])
     qa = rng.uniform(-3, 3, size=(2, 3))
     qb = np.vstack([rng.uniform(-3, 3, size=(2, 3)), qa[0] + [0.01, -0.02, 0.005]])
-    m = trapezoid_leg_times(qa, qb, lim)
+    m = joint_leg_times(qa, qb, lim)
     assert m.shape == (2, 3)
     for r in range(2):
         for c in range(3):
-            oracle = _straight_line_time(qb[c] - qa[r], lim.velocity, lim.acceleration)
+            oracle = _synchronised_time(qb[c] - qa[r], lim.velocity, lim.acceleration)
             assert m[r, c] == pytest.approx(oracle, rel=2e-3)
 
 
@@ -311,7 +309,7 @@ def test_trapezoid_equals_ruckig_without_jerk_and_is_below_it_with_jerk() -> Non
     lim = joint_limits(v, a)
     for _ in range(10):
         q0, q1 = rng.uniform(-2, 2, 6), rng.uniform(-2, 2, 6)
-        closed = trapezoid_leg_times(q0, q1, lim)[0, 0]
+        closed = joint_leg_times(q0, q1, lim)[0, 0]
         assert ruckig_leg_time(q0, q1, v, a) == pytest.approx(closed, rel=1e-6)
         assert ruckig_leg_time(q0, q1, v, a, np.full(6, 20.0)) > closed
 

@@ -1,22 +1,23 @@
-"""Rest-to-rest joint-space leg times of an n-joint arm.
+"""Rest-to-rest joint moves of an n-joint arm: the ``joint`` time model and its execution.
 
-Two models of the same move q_a -> q_b (every joint starts and ends at rest):
+The ``joint`` model is the same move on every robot: each joint follows its own
+time-optimal rest-to-rest profile under its velocity, acceleration and (where the arm has
+them) jerk limits, stretched so that every joint starts and stops together (ruckig's time
+synchronisation). Its duration is the slowest joint's minimum time,
+``max_j T(|q_b,j - q_a,j|; v_j, a_j, jerk_j)``, with ``T`` the exact trapezoid, or with
+jerk limits the exact 7-segment profile's time
+(:func:`~subtask_opt.arm._kinematics_kernels.scurve_time_nb`).
 
-* :func:`trapezoid_leg_times` - the synchronised trapezoid, closed form: every
-  joint follows the same time profile s(t) from 0 to 1 scaled by its distance
-  ``d_j`` (phase synchronisation: the move is a straight line in joint space,
-  which is what the leg collision sweep checks), so s may move at most
-  ``V = min_j v_j / d_j`` and accelerate at most ``A = min_j a_j / d_j``; the
-  time is ``2 / sqrt(A)`` when full speed is never reached (``V^2 / A >= 1``)
-  and ``1 / V + V / A`` otherwise. With jerk limits, s also jerks at most
-  ``J = min_j j_j / d_j`` and the time is the exact 7-segment profile's
-  (:func:`~subtask_opt.arm._kinematics_kernels.scurve_time_nb`). Vectorised: an (a, n)
-  by (b, n) pair of configuration sets gives the (a, b) matrix of leg times in one numba
-  kernel. This is the time model the sequencer searches with: the ``joint`` model.
-* :func:`ruckig_leg_time` - ruckig's time-optimal profile of the same
-  straight joint line with the arm's jerk limits (the executed time,
-  :class:`StraightLeg`): equal to the first to round-off, so the time the search
-  optimises is the time the trajectory drives (``tests/arm/test_serial.py``).
+* :func:`joint_leg_times` / :func:`joint_leg_square` - that time, vectorised: an (a, n) by
+  (b, n) pair of configuration sets gives the (a, b) matrix of leg times in one numba
+  kernel. This is what the sequencer searches with (a planar arm's ``joint`` model is the
+  same formula, :func:`~subtask_opt.arm._kinematics_kernels.joint_tensor`).
+* :func:`joint_move` - ruckig's time-synchronised profile of the same move (offline API),
+  the executed trajectory of a leg (:class:`JointMove`): its duration equals the planned
+  time to round-off, so the time the search optimises is the time the trajectory drives
+  (``tests/arm/test_serial_problem.py``). Every joint moves monotonically from its start
+  to its goal (no overshoot, no reversal; tested), which is what the collision sweep of a
+  leg relies on (:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_samples`).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.arm._kinematics_kernels import scurve_time_nb
+from subtask_opt.arm._kinematics_kernels import scurve_time_nb, trapezoid_time_nb
 from subtask_opt.base.errors import ParameterError
 
 
@@ -58,54 +59,34 @@ def joint_limits(velocity: Any, acceleration: Any, jerk: Any = None) -> JointLim
 
 
 @njit(cache=True, inline="always")
-def _leg_time(qa, r, qb, c, inv_v, inv_a, inv_j):
-    tv = 0.0  # 1 / V: the path parameter's speed limit
-    ta = 0.0  # 1 / A: its acceleration limit
-    tj = 0.0  # 1 / J: its jerk limit (when the arm has jerk limits)
-    jerk = inv_j.shape[0] > 0
-    for j in range(inv_v.shape[0]):
-        d = abs(qb[c, j] - qa[r, j])
-        x = d * inv_v[j]
-        if x > tv:
-            tv = x
-        y = d * inv_a[j]
-        if y > ta:
-            ta = y
-        if jerk:
-            z = d * inv_j[j]
-            if z > tj:
-                tj = z
+def _leg_time(qa, r, qb, c, velocity, acceleration, jerk):
     out = 0.0
-    if tv == 0.0:
-        out = 0.0
-    elif jerk:
-        out = scurve_time_nb(1.0, 1.0 / tv, 1.0 / ta, 1.0 / tj)
-    elif ta >= tv * tv:  # full speed never reached: a triangle
-        out = 2.0 * math.sqrt(ta)
-    else:
-        out = tv + ta / tv
+    limited = jerk.shape[0] > 0
+    for j in range(velocity.shape[0]):
+        d = abs(qb[c, j] - qa[r, j])
+        if limited:
+            t = scurve_time_nb(d, velocity[j], acceleration[j], jerk[j])
+        else:
+            t = trapezoid_time_nb(d, velocity[j], acceleration[j])
+        if t > out:
+            out = t
     return out
 
 
 @njit(cache=True)
-def _trapezoid_matrix(qa, qb, limits):
-    inv_v = 1.0 / limits.velocity
-    inv_a = 1.0 / limits.acceleration
-    inv_j = 1.0 / limits.jerk
+def _leg_matrix(qa, qb, limits):
     out = np.empty((qa.shape[0], qb.shape[0]))
     for r in range(qa.shape[0]):
         for c in range(qb.shape[0]):
-            out[r, c] = _leg_time(qa, r, qb, c, inv_v, inv_a, inv_j)
+            out[r, c] = _leg_time(qa, r, qb, c, limits.velocity, limits.acceleration,
+                                  limits.jerk)
     return out
 
 
 @njit(cache=True)
-def _trapezoid_square(q, limits):
+def _leg_square(q, limits):
     """The (m, m) matrix of q to itself: the upper triangle, mirrored tile by tile
     (exactly symmetric; half the arithmetic, and the tiles keep the mirror writes local)."""
-    inv_v = 1.0 / limits.velocity
-    inv_a = 1.0 / limits.acceleration
-    inv_j = 1.0 / limits.jerk
     m = q.shape[0]
     out = np.empty((m, m))
     tile = 64
@@ -113,108 +94,112 @@ def _trapezoid_square(q, limits):
         for c0 in range(r0, m, tile):
             for r in range(r0, min(r0 + tile, m)):
                 for c in range(max(c0, r), min(c0 + tile, m)):
-                    t = _leg_time(q, r, q, c, inv_v, inv_a, inv_j)
+                    t = _leg_time(q, r, q, c, limits.velocity, limits.acceleration,
+                                  limits.jerk)
                     out[r, c] = t
                     out[c, r] = t
     return out
 
 
-def trapezoid_square(q: Any, limits: JointLimits) -> np.ndarray:
-    """(m, m) synchronised trapezoid times between every pair of the configurations
-    ``q`` (m, n): :func:`trapezoid_leg_times` of ``q`` to itself, exactly symmetric."""
+def joint_leg_square(q: Any, limits: JointLimits) -> np.ndarray:
+    """(m, m) ``joint`` times between every pair of the configurations ``q`` (m, n):
+    :func:`joint_leg_times` of ``q`` to itself, exactly symmetric."""
     a = np.ascontiguousarray(np.atleast_2d(np.asarray(q, dtype=np.float64)))
     n = limits.velocity.shape[0]
     if a.ndim != 2 or a.shape[1] != n or not np.all(np.isfinite(a)):
-        raise ParameterError(f"trapezoid_square needs finite (m, {n}) configurations, "
+        raise ParameterError(f"joint_leg_square needs finite (m, {n}) configurations, "
                              f"got shape {a.shape}")
-    return _trapezoid_square(a, limits)  # type: ignore[no-any-return]
+    return _leg_square(a, limits)  # type: ignore[no-any-return]
 
 
-def trapezoid_leg_times(qa: Any, qb: Any, limits: JointLimits) -> np.ndarray:
-    """(a, b) synchronised trapezoid times of every leg ``qa[r] -> qb[c]`` (see module doc).
+def joint_leg_times(qa: Any, qb: Any, limits: JointLimits) -> np.ndarray:
+    """(a, b) ``joint`` times of every leg ``qa[r] -> qb[c]`` (see module doc).
 
     Args:
         qa: (a, n) or (n,) start configurations.
         qb: (b, n) or (n,) end configurations.
-        limits: the joints' velocity and acceleration limits.
+        limits: the joints' velocity, acceleration and jerk limits.
     """
     a = np.ascontiguousarray(np.atleast_2d(np.asarray(qa, dtype=np.float64)))
     b = np.ascontiguousarray(np.atleast_2d(np.asarray(qb, dtype=np.float64)))
     n = limits.velocity.shape[0]
     if a.ndim != 2 or b.ndim != 2 or a.shape[1] != n or b.shape[1] != n:
-        raise ParameterError(f"trapezoid_leg_times needs (a, {n}) and (b, {n}) configurations, "
+        raise ParameterError(f"joint_leg_times needs (a, {n}) and (b, {n}) configurations, "
                              f"got {a.shape} and {b.shape}")
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-        raise ParameterError("trapezoid_leg_times: configurations must be finite")
-    return _trapezoid_matrix(a, b, limits)  # type: ignore[no-any-return]
+        raise ParameterError("joint_leg_times: configurations must be finite")
+    return _leg_matrix(a, b, limits)  # type: ignore[no-any-return]
 
 
-class StraightLeg:
-    """A rest-to-rest straight joint line q0 + (q1 - q0) s(t), s from 0 to 1 by ruckig.
+class JointMove:
+    """One executed rest-to-rest joint move q0 -> q1 (:func:`joint_move`).
 
-    ``s`` is ruckig's time-optimal 1-D profile under the tightest scaled limits
-    (``min_j v_j / d_j``, ``min_j a_j / d_j``, ``min_j jerk_j / d_j``), so every joint
-    keeps its limits and the arm stays on the line the collision sweep checked.
+    Attributes:
+        q0, q1: (n,) start and goal.
+        duration: its duration (s); 0 when q0 == q1.
     """
 
-    def __init__(self, q0: np.ndarray, q1: np.ndarray, traj: Any) -> None:
+    def __init__(self, q0: np.ndarray, q1: np.ndarray, profile: Any) -> None:
         self.q0 = q0
-        self.dq = q1 - q0
-        self._traj = traj
-        self.duration = float(traj.duration)
+        self.q1 = q1
+        self._profile = profile
+        self.duration = 0.0 if profile is None else float(profile.duration)
 
-    def at_time(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, qd, qdd), each (n,), at leg time t (s)."""
-        p, v, a = self._traj.at_time(float(t))
-        return self.q0 + self.dq * p[0], self.dq * v[0], self.dq * a[0]
+    def states(self, t: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q, qd, qdd), each (T, n), at move times t (s, clamped to [0, duration])."""
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=np.float64)), 0.0, self.duration)
+        n = self.q0.size
+        if self._profile is None:
+            zero = np.zeros((t.size, n))
+            return np.tile(self.q0, (t.size, 1)), zero, zero.copy()
+        out = [self._profile.at_time(float(tk)) for tk in t]
+        return tuple(np.array([o[i] for o in out], dtype=np.float64).reshape(-1, n)
+                     for i in range(3))  # type: ignore[return-value]
+
+    def positions(self, t: Any) -> np.ndarray:
+        """(T, n) joint positions at move times t (s)."""
+        return self.states(t)[0]
 
 
-def ruckig_trajectory(q0: Any, q1: Any, velocity: Any, acceleration: Any,
-                      jerk: Any = None) -> StraightLeg:
-    """Time-optimal rest-to-rest straight joint line q0 -> q1 (:class:`StraightLeg`).
+def joint_move(q0: Any, q1: Any, velocity: Any, acceleration: Any,
+               jerk: Any = None) -> JointMove:
+    """Ruckig's time-optimal, time-synchronised rest-to-rest move q0 -> q1.
 
-    ``jerk`` None: no jerk limit (a trapezoid). ParameterError if the two are equal
-    or ruckig cannot plan the move.
+    ``jerk`` None: no jerk limit (trapezoids). ParameterError if ruckig cannot plan it.
     """
     from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-    a = np.asarray(q0, dtype=np.float64)
-    b = np.asarray(q1, dtype=np.float64)
-    d = np.abs(b - a)
-    if not d.any():
-        raise ParameterError("ruckig_trajectory: q0 and q1 are the same")
-    moving = d > 0
-    v_s = float(np.min(np.asarray(velocity, dtype=np.float64)[moving] / d[moving]))
-    a_s = float(np.min(np.asarray(acceleration, dtype=np.float64)[moving] / d[moving]))
-    j_s = (math.inf if jerk is None
-           else float(np.min(np.asarray(jerk, dtype=np.float64)[moving] / d[moving])))
-    otg = Ruckig(1)
-    inp = InputParameter(1)
-    inp.current_position = [0.0]
-    inp.target_position = [1.0]
-    inp.current_velocity = [0.0]
-    inp.current_acceleration = [0.0]
-    inp.target_velocity = [0.0]
-    inp.target_acceleration = [0.0]
-    inp.max_velocity = [v_s]
-    inp.max_acceleration = [a_s]
-    inp.max_jerk = [j_s]
-    traj = Trajectory(1)
-    status = otg.calculate(inp, traj)
+    a = np.array(q0, dtype=np.float64).ravel()
+    b = np.array(q1, dtype=np.float64).ravel()
+    if np.array_equal(a, b):
+        return JointMove(a, b, None)
+    n = a.size
+    otg = Ruckig(n)
+    inp = InputParameter(n)
+    inp.current_position = a.tolist()
+    inp.target_position = b.tolist()
+    inp.current_velocity = [0.0] * n
+    inp.current_acceleration = [0.0] * n
+    inp.target_velocity = [0.0] * n
+    inp.target_acceleration = [0.0] * n
+    inp.max_velocity = np.broadcast_to(np.asarray(velocity, dtype=np.float64), (n,)).tolist()
+    inp.max_acceleration = np.broadcast_to(np.asarray(acceleration, dtype=np.float64),
+                                           (n,)).tolist()
+    inp.max_jerk = ([math.inf] * n if jerk is None
+                    else np.broadcast_to(np.asarray(jerk, dtype=np.float64), (n,)).tolist())
+    profile = Trajectory(n)
+    status = otg.calculate(inp, profile)
     if status not in (Result.Working, Result.Finished):
         raise ParameterError(f"ruckig cannot plan the joint move {a.tolist()} -> "
                              f"{b.tolist()}: {status}")
-    return StraightLeg(a, b, traj)
+    return JointMove(a, b, profile)
 
 
 def ruckig_leg_time(q0: Any, q1: Any, velocity: Any, acceleration: Any,
                     jerk: Any = None) -> float:
-    """Duration (s) of :func:`ruckig_trajectory` (0 for q0 == q1)."""
-    if np.array_equal(np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)):
-        return 0.0
-    return float(ruckig_trajectory(q0, q1, velocity, acceleration, jerk).duration)
+    """Duration (s) of :func:`joint_move` (0 for q0 == q1)."""
+    return joint_move(q0, q1, velocity, acceleration, jerk).duration
 
 
-__all__ = ["JointLimits", "StraightLeg", "joint_limits", "ruckig_leg_time", "ruckig_trajectory",
-           "trapezoid_square",
-           "trapezoid_leg_times"]
+__all__ = ["JointLimits", "JointMove", "joint_leg_square", "joint_leg_times", "joint_limits",
+           "joint_move", "ruckig_leg_time"]
