@@ -22,16 +22,13 @@ joint, on a joint and its parent, and those already touching at the reference
 configuration (every joint at 0, clipped into its limits), the "adjacent" and
 "default" rules of MoveIt's setup assistant.
 
-Leg checks: :meth:`CollisionChecker.leg_in_collision` tests the move the arm executes,
-ruckig's time-synchronised rest-to-rest profile q0 -> q1 under the arm's limits
-(:func:`~subtask_opt.arm.timing.joint_legs.joint_move`), at configurations along it where
-``sum_j R_j |dq_j| <= clearance`` between consecutive ones; R_j bounds the distance from
-joint j's axis to any point of the geometry it carries (for a revolute joint; 1 for a
-prismatic one). Every joint moves monotonically during the move, so between two samples
-no point of the robot moves more than ``clearance``, and a collision the samples miss is
-one no deeper than ``clearance`` (the bound is tested). About
-``ceil(sum_j R_j |q1_j - q0_j| / clearance)`` samples: the move is sampled where its
-weighted progress reaches equal steps, and any step still over the clearance is halved.
+Leg checks: :meth:`CollisionChecker.leg_in_collision` tests the straight joint
+line q0 -> q1 at ``n + 1`` evenly spaced configurations with
+``n = ceil(sum_j R_j |q1_j - q0_j| / clearance)``, where R_j bounds the distance
+from joint j's axis to any point of the geometry it carries (for a revolute
+joint; 1 for a prismatic one). Between consecutive samples no point of the robot
+moves more than ``clearance``, so a collision the samples miss is one no deeper
+than ``clearance`` (the bound is tested).
 """
 
 from __future__ import annotations
@@ -418,40 +415,18 @@ class CollisionChecker:
         """(nq,) R_j: no robot point moves faster than sum_j R_j |dq_j| (read-only copy)."""
         return self._sweep_radius.copy()
 
-    def leg_sample_times(self, move: Any, clearance: float) -> np.ndarray:
-        """Times (s) along a :class:`~subtask_opt.arm.timing.joint_legs.JointMove` at which
-        :meth:`leg_in_collision` checks it, 0 and its duration included (module doc)."""
-        require_in_range("leg_samples", "clearance", clearance, 1e-6, 10.0)
-        radii = self._sweep_radius
-        total = float(radii @ np.abs(move.q1 - move.q0))
-        if move.duration == 0.0:
-            return np.array([0.0, 0.0])
-        n = max(1, math.ceil(total / clearance))
-        dense = np.linspace(0.0, move.duration, 4 * n + 1)
-        progress = np.abs(move.positions(dense) - move.q0) @ radii  # monotone in time
-        t = np.interp(np.linspace(0.0, total, n + 1), progress, dense)
-        t[0], t[-1] = 0.0, move.duration
-        while True:
-            step = np.abs(np.diff(move.positions(t), axis=0)) @ radii
-            long = np.flatnonzero(step > clearance)
-            if long.size == 0:
-                return t
-            t = np.sort(np.concatenate([t, 0.5 * (t[long] + t[long + 1])]))
-
     def leg_samples(self, q0: Any, q1: Any, clearance: float) -> np.ndarray:
-        """The (k, nq) configurations :meth:`leg_in_collision` checks, q0 first, q1 last."""
-        move = self._move(q0, q1)
-        return move.positions(self.leg_sample_times(move, clearance))
-
-    def _move(self, q0: Any, q1: Any) -> Any:
-        from subtask_opt.arm.timing.joint_legs import joint_move
-
-        lim = self.arm.limits
-        return joint_move(self.arm.check_q(q0), self.arm.check_q(q1), lim.velocity,
-                          lim.require("acceleration"), lim.jerk)
+        """The (n + 1, nq) configurations :meth:`leg_in_collision` checks, q0 first, q1 last."""
+        require_in_range("leg_samples", "clearance", clearance, 1e-6, 10.0)
+        a = self.arm.check_q(q0)
+        b = self.arm.check_q(q1)
+        travel = float(self._sweep_radius @ np.abs(b - a))
+        n = max(1, math.ceil(travel / clearance))
+        t = np.linspace(0.0, 1.0, n + 1)[:, None]
+        return a + t * (b - a)
 
     def leg_in_collision(self, q0: Any, q1: Any, clearance: float) -> bool:
-        """Whether the executed joint move q0 -> q1 hits something (see module doc).
+        """Whether the straight joint-space leg q0 -> q1 hits something (see module doc).
 
         ``clearance`` (m): the largest distance any robot point moves between two
         checked configurations.

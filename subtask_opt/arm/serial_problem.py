@@ -3,9 +3,9 @@
 A :class:`SerialProblem` is built once: every IK solution of every target
 (configurations in collision with the scene or the arm itself dropped), then
 the matrix of joint-space leg times between all configurations and the home
-configuration (the joint model: every joint time-optimal under its velocity,
-acceleration and, where the arm has them, jerk limits, all starting and stopping
-together, :func:`~subtask_opt.arm.timing.joint_legs.joint_leg_times`).
+configuration (the joint model, phase-synchronised: every joint on the straight
+joint-space line, time-optimal under the velocity, acceleration and, where the arm has
+them, jerk limits, :func:`~subtask_opt.arm.timing.joint_legs.joint_leg_times`).
 :func:`solve_serial_problem` searches the order and one configuration per target
 together (a generalised TSP on the shared micro-GA core, decoded exactly by a
 layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
@@ -21,9 +21,9 @@ once more knowing those legs and the shorter answer is kept
 (``legs_detoured`` is always 0).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
-ruckig's time-optimal, time-synchronised profiles with the arm's jerk limits for
-the chosen legs (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`), equal to the
-planned times to round-off.
+ruckig's time-optimal profiles of the same straight lines with the arm's jerk limits
+(:func:`~subtask_opt.arm.timing.joint_legs.joint_move`), equal to the planned times to
+round-off.
 """
 
 from __future__ import annotations

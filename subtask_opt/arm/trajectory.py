@@ -5,10 +5,11 @@
 rest-to-rest legs through the stops of the tour (the home first and, for a closed tour,
 last; open tours end at their last target), each a :class:`Leg` of
 
-* a joint move: ruckig's time-optimal, time-synchronised profile (every joint its own
-  profile, all starting and stopping together), jerk-limited when the arm has jerk
-  limits: the ``joint`` model's leg on every robot
-  (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`);
+* a joint move: ruckig's time-optimal synchronised profile, jerk-limited when the arm
+  has jerk limits, as the ``joint`` model timed it
+  (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`): on a serial arm
+  phase-synchronised (the straight joint-space line its collision sweep checked), on a
+  planar arm time-synchronised (each joint its own profile, all ending together);
 * (planar arms) a straight line: the time-optimal parameterisation of the line under the
   joint and Cartesian limits (:mod:`subtask_opt.arm.timing._line_kernels`), jerk-limited
   like the ``line`` time model times it.
@@ -355,7 +356,7 @@ def _planar(result: Any, report: Any) -> Trajectory:
         kind = "line"
         if line is None:
             kind = "joint"
-            joint = joint_move(q0, q1, lim.velocity, lim.acceleration, lim.jerk)
+            joint = joint_move(q0, q1, lim.velocity, lim.acceleration, lim.jerk, phase=False)
             line = joint.duration, joint.states
         duration, ev = line
         home = problem.size - 1 if homed else None

@@ -17,8 +17,8 @@ The three peers come from :mod:`subtask_opt.tour.peers` (imported lazily; a
 missing module or function is reported, not faked). Every answer is executed
 with the same ruckig legs and validated
 (:func:`~subtask_opt.arm.trajectory.validate`). Our
-legs are swept for collisions and avoided; the peers' legs are the same joint
-moves, whose collisions are only counted (RoboTSP plans such legs with BiRRT).
+legs are swept for collisions and avoided; the peers' legs are straight joint
+moves whose collisions are only counted (RoboTSP plans such legs with BiRRT).
 RoboTSP's published figures (``published.json``) are printed beside ours as
 context: the robot frames were reconstructed, so absolute times compare only
 loosely.

@@ -268,10 +268,13 @@ def test_the_planned_leg_time_is_the_executed_one_with_jerk_limits() -> None:
     assert np.all(without <= executed * (1 + 1e-9)) and np.any(without < 0.99 * executed)
 
 
-def test_every_joint_of_an_executed_move_is_monotone_and_on_time() -> None:
-    """What the collision sweep relies on: in ruckig's time-synchronised rest-to-rest move
-    every joint goes from its start to its goal without reversing or overshooting, and the
-    move takes the slowest joint's closed-form time (random limits, with and without jerk)."""
+@pytest.mark.parametrize("phase", [True, False])
+def test_executed_joint_moves_take_the_planned_time(phase: bool) -> None:
+    """ruckig's executed move against the closed forms, random limits with and without
+    jerk: phase-synchronised (serial arms) it is the straight line and takes
+    joint_leg_times; time-synchronised (planar arms) it takes the slowest joint's own time
+    and never longer; either way every joint goes monotonically from start to goal."""
+    from subtask_opt.arm._kinematics_kernels import scurve_time_nb, trapezoid_time_nb
     from subtask_opt.arm.timing.joint_legs import joint_leg_times, joint_limits, joint_move
 
     rng = np.random.default_rng(5)
@@ -281,10 +284,18 @@ def test_every_joint_of_an_executed_move_is_monotone_and_on_time() -> None:
         jerk = rng.uniform(2.0, 300.0, n) if k % 2 else None
         q0 = rng.uniform(-3, 3, n)
         q1 = q0 + rng.uniform(-3, 3, n) * (rng.random(n) < 0.8)
-        move = joint_move(q0, q1, v, a, jerk)
-        planned = joint_leg_times(q0, q1, joint_limits(v, a, jerk))[0, 0]
-        assert move.duration == pytest.approx(planned, rel=1e-9, abs=1e-12)
+        move = joint_move(q0, q1, v, a, jerk, phase=phase)
+        straight = joint_leg_times(q0, q1, joint_limits(v, a, jerk))[0, 0]
+        d = np.abs(q1 - q0)
+        own = max(scurve_time_nb(d[i], v[i], a[i], jerk[i]) if jerk is not None
+                  else trapezoid_time_nb(d[i], v[i], a[i]) for i in range(n))
+        assert move.duration == pytest.approx(straight if phase else own, rel=1e-9, abs=1e-12)
+        assert own <= straight * (1 + 1e-12)
         q, qd, _ = move.states(np.linspace(0.0, move.duration, 301))
         towards = np.sign(q1 - q0)
         assert np.all(qd * towards >= -1e-12)
         assert np.all((q - q0) * towards >= -1e-12) and np.all((q1 - q) * towards >= -1e-12)
+        if phase and d.any():  # on the line: every joint at the same fraction of its way
+            i = int(np.argmax(d))
+            share = (q[:, i] - q0[i]) / (q1[i] - q0[i])
+            np.testing.assert_allclose(q, q0 + share[:, None] * (q1 - q0), atol=1e-12)
