@@ -122,3 +122,31 @@ def test_a_time_budget_or_a_met_target_ends_every_run():
 def test_bad_run_counts_are_rejected(runs):
     with pytest.raises(ParameterError, match="runs"):
         _run(runs=runs)
+
+
+def test_compiled_entry_is_the_kernel_for_those_types_or_the_kernel_itself():
+    from typing import NamedTuple
+
+    from numba import njit
+
+    from subtask_opt.ga.loop import compiled_entry
+
+    class Pair(NamedTuple):
+        a: float
+        b: np.ndarray
+
+    @njit
+    def total(x, pair):
+        return x + pair.a + pair.b.sum()
+
+    args = (1.0, Pair(2.0, np.arange(3.0)))
+    assert total(*args) == 6.0
+    entry = compiled_entry(total, args)
+    assert entry is not total and entry(*args) == 6.0
+    assert entry(0.5, Pair(1.0, np.ones(2))) == 3.5  # any arguments of the same types
+    assert compiled_entry(total, (1, args[1])) is total  # an int64 x was never compiled
+
+    def plain(x, pair):  # NUMBA_DISABLE_JIT: kernels are plain functions
+        return x
+
+    assert compiled_entry(plain, args) is plain
