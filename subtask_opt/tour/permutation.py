@@ -428,22 +428,33 @@ def exact_local_search(genes, length, data, aux):
 # cities, shorter than the edge it removes, are tried.
 
 
+@njit(cache=True, inline="always")
+def _wrap(x, n):
+    """``x % n`` for ``-n <= x < 2n`` without an integer division (a division costs tens of
+    cycles, and the moves below take several positions modulo N per candidate)."""
+    if x < 0:
+        x += n
+    elif x >= n:
+        x -= n
+    return x
+
+
 @njit(cache=True)
 def _reverse(tour, pos, n, i, j):
     """Reverse the cyclic run tour[i..j] (or its complement, same cycle).
 
     Calling it again with the same ``i, j`` undoes it.
     """
-    length = (j - i) % n + 1
+    length = _wrap(j - i, n) + 1
     if 2 * length > n:  # reversing the complement gives the same cycle, cheaper
-        i, j = (j + 1) % n, (i - 1) % n
+        i, j = _wrap(j + 1, n), _wrap(i - 1, n)
         length = n - length
     for _ in range(length // 2):
         a, b = tour[i], tour[j]
         tour[i], tour[j] = b, a
         pos[b], pos[a] = i, j
-        i = (i + 1) % n
-        j = (j - 1) % n
+        i = _wrap(i + 1, n)
+        j = _wrap(j - 1, n)
 
 
 @njit(cache=True)
@@ -507,22 +518,22 @@ def _move_run(genes, w, n, i, seg, x_pos, reverse):
     """Move the run genes[i..i+seg-1] to just after position x_pos (outside the run),
     reversed or not: two or three flips over the shorter stretch between them."""
     s0 = genes[i]
-    s1 = genes[(i + seg - 1) % n]
-    before_s1 = genes[(i + seg - 2) % n]  # the run's second city from s1 (if seg > 1)
+    s1 = genes[_wrap(i + seg - 1, n)]
+    before_s1 = genes[_wrap(i + seg - 2, n)]  # the run's second city from s1 (if seg > 1)
     after = (x_pos - (i + seg - 1)) % n  # cities between the run's end and x, x included
     before = n - seg - after  # cities between y and the run's start
     if after <= before:  # p [R][M] y -> p [M][R] y, M = q .. x
         x = genes[x_pos]
-        before_x = genes[(x_pos - 1) % n]
-        q = genes[(i + seg) % n]
-        _reverse_path(genes, w, n, s0, genes[(i + 1) % n], x)  # [x..q][s1..s0]
+        before_x = genes[_wrap(x_pos - 1, n)]
+        q = genes[_wrap(i + seg, n)]
+        _reverse_path(genes, w, n, s0, genes[_wrap(i + 1, n)], x)  # [x..q][s1..s0]
         if after > 1:
             _reverse_path(genes, w, n, x, before_x, q)
     else:  # x [B][R] q -> x [R][B] q, B = y .. p
-        y = genes[(x_pos + 1) % n]
-        p = genes[(i - 1) % n]
-        before_p = genes[(i - 2) % n]
-        _reverse_path(genes, w, n, y, genes[(x_pos + 2) % n], s1)  # [s1..s0][p..y]
+        y = genes[_wrap(x_pos + 1, n)]
+        p = genes[_wrap(i - 1, n)]
+        before_p = genes[_wrap(i - 2, n)]
+        _reverse_path(genes, w, n, y, genes[_wrap(x_pos + 2, n)], s1)  # [s1..s0][p..y]
         if before > 1:
             _reverse_path(genes, w, n, p, before_p, y)
     if not reverse and seg > 1:
@@ -542,7 +553,7 @@ def _push(queue, queued, state, n, city):
 def _reverse_path(genes, w, n, u, u2, v):
     """Flip the tour path from ``u`` (whose next city on the path is ``u2``) to ``v``,
     whichever way round it lies in the array."""
-    if genes[(w.pos[u] + 1) % n] == u2:
+    if genes[_wrap(w.pos[u] + 1, n)] == u2:
         _flip(genes, w, n, w.pos[u], w.pos[v])
     else:
         _flip(genes, w, n, w.pos[v], w.pos[u])
@@ -566,7 +577,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
     touched = w.touched
     for side in range(2):
         s = 1 if side == 0 else -1
-        t2 = genes[(pos[t1] + s) % n]
+        t2 = genes[_wrap(pos[t1] + s, n)]
         g0 = data[t1, t2]
         for a in range(k_nb):
             t3 = nb[t2, a]
@@ -575,16 +586,16 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                 break
             if t3 == t1:
                 continue
-            l23 = ((pos[t3] - pos[t2]) * s) % n  # steps from t2 to t3 along s
+            l23 = _wrap((pos[t3] - pos[t2]) * s, n)  # steps from t2 to t3 along s
             for which in range(2):
                 if which == 0:  # t4 behind t3: a 2-opt move, or its 3-opt extensions
-                    t4 = genes[(pos[t3] - s) % n]
+                    t4 = genes[_wrap(pos[t3] - s, n)]
                     if t4 == t2:
                         continue
                     big = g1 + data[t3, t4]
                     gain = big - data[t4, t1]
                     if gain > eps:
-                        _reverse_path(genes, w, n, t2, genes[(pos[t2] + s) % n], t4)
+                        _reverse_path(genes, w, n, t2, genes[_wrap(pos[t2] + s, n)], t4)
                         touched[0], touched[1], touched[2], touched[3] = t1, t2, t3, t4
                         touched[4], touched[5] = t1, t2
                         return gain
@@ -597,15 +608,15 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                             continue
                         # after the 2-opt flip (t1 t4 .. t2 t3 ..), t6 is t5's
                         # predecessor there: its successor inside t2..t4, else its predecessor
-                        inside = ((pos[t5] - pos[t2]) * s) % n < l23
-                        t6 = genes[(pos[t5] + s) % n] if inside else genes[(pos[t5] - s) % n]
+                        inside = _wrap((pos[t5] - pos[t2]) * s, n) < l23
+                        t6 = genes[_wrap(pos[t5] + s, n)] if inside else genes[_wrap(pos[t5] - s, n)]
                         if t6 == t4 or t6 == t1:
                             continue
                         gain = g2 + data[t5, t6] - data[t6, t1]
                         if gain > eps:
-                            _reverse_path(genes, w, n, t2, genes[(pos[t2] + s) % n], t4)
+                            _reverse_path(genes, w, n, t2, genes[_wrap(pos[t2] + s, n)], t4)
                             # now t1 t4 ... t2 t3: the second flip reverses t4 .. t6
-                            if genes[(pos[t1] + 1) % n] == t4:
+                            if genes[_wrap(pos[t1] + 1, n)] == t4:
                                 _flip(genes, w, n, pos[t4], pos[t6])
                             else:
                                 _flip(genes, w, n, pos[t6], pos[t4])
@@ -613,7 +624,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                             touched[3], touched[4], touched[5] = t4, t5, t6
                             return gain
                 else:  # t4 ahead of t3: the cycle t2..t3 must be rejoined inside
-                    t4 = genes[(pos[t3] + s) % n]
+                    t4 = genes[_wrap(pos[t3] + s, n)]
                     if t4 == t1:
                         continue
                     big = g1 + data[t3, t4]
@@ -622,25 +633,25 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                         g2 = big - data[t4, t5]
                         if g2 <= eps:
                             break
-                        l25 = ((pos[t5] - pos[t2]) * s) % n
+                        l25 = _wrap((pos[t5] - pos[t2]) * s, n)
                         if l25 > l23:  # t5 outside t2..t3
                             continue
                         for nxt in range(2):
                             if nxt == 0:  # t6 after t5: t1 [t6..t3] [t2..t5] t4
                                 if t5 == t3:
                                     continue
-                                t6 = genes[(pos[t5] + s) % n]
+                                t6 = genes[_wrap(pos[t5] + s, n)]
                             else:  # t6 before t5: t1 rev[t2..t6] rev[t5..t3] t4
                                 if t5 == t2:
                                     continue
-                                t6 = genes[(pos[t5] - s) % n]
+                                t6 = genes[_wrap(pos[t5] - s, n)]
                             gain = g2 + data[t5, t6] - data[t6, t1]
                             if gain > eps:
                                 # each path's second city, before anything moves
-                                after_t2 = genes[(pos[t2] + s) % n]
-                                before_t3 = genes[(pos[t3] - s) % n]
-                                before_t5 = genes[(pos[t5] - s) % n]
-                                after_t5 = genes[(pos[t5] + s) % n]
+                                after_t2 = genes[_wrap(pos[t2] + s, n)]
+                                before_t3 = genes[_wrap(pos[t3] - s, n)]
+                                before_t5 = genes[_wrap(pos[t5] - s, n)]
+                                after_t5 = genes[_wrap(pos[t5] + s, n)]
                                 if nxt == 0:
                                     _reverse_path(genes, w, n, t2, after_t2, t3)
                                     if t3 != t6:
@@ -669,30 +680,31 @@ def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     pos = w.pos
     touched = w.touched
     for seg in range(1, max_seg + 1):
-        for end in range(2):
-            i = pos[a] if end == 0 else (pos[a] - seg + 1) % n
+        ends = 2 if seg > 1 else 1  # a single city starts and ends its run: one try
+        for end in range(ends):
+            i = pos[a] if end == 0 else _wrap(pos[a] - seg + 1, n)
             s0 = genes[i]
-            s1 = genes[(i + seg - 1) % n]
-            p = genes[(i - 1) % n]
-            q = genes[(i + seg) % n]
+            s1 = genes[_wrap(i + seg - 1, n)]
+            p = genes[_wrap(i - 1, n)]
+            q = genes[_wrap(i + seg, n)]
             removed = data[p, s0] + data[s1, q] - data[p, q]
             if removed <= eps:
                 continue
-            for which in range(2):
+            for which in range(ends):
                 s = s0 if which == 0 else s1
                 for t in range(k_nb):
                     c = nb[s, t]
                     if min(data[s, c], data[c, s]) >= removed - eps:
                         break
                     ic = pos[c]
-                    if (ic - i) % n < seg:  # c is inside the run
+                    if _wrap(ic - i, n) < seg:  # c is inside the run
                         continue
                     for after in range(2):  # the edge after c, then the edge before it
-                        x_pos = ic if after == 1 else (ic - 1) % n
-                        if (x_pos - i) % n < seg or ((x_pos + 1) - i) % n < seg:
+                        x_pos = ic if after == 1 else _wrap(ic - 1, n)
+                        if _wrap(x_pos - i, n) < seg or _wrap((x_pos + 1) - i, n) < seg:
                             continue
                         x = genes[x_pos]
-                        y = genes[(x_pos + 1) % n]
+                        y = genes[_wrap(x_pos + 1, n)]
                         fwd = data[x, s0] + data[s1, y]
                         rev = data[x, s1] + data[s0, y] if reversible else np.inf
                         gain = removed + data[x, y] - min(fwd, rev)
@@ -712,10 +724,10 @@ def _swap_blocks(genes, pos, n, start, len1, len2, scratch):
     """Rewrite the cyclic run of ``len1`` then ``len2`` cities from position ``start`` as
     the second block then the first, each in its own direction."""
     for t in range(len1 + len2):
-        scratch[t] = genes[(start + t) % n]
+        scratch[t] = genes[_wrap(start + t, n)]
     for t in range(len1 + len2):
         c = scratch[(len1 + t) % (len1 + len2)]
-        p = (start + t) % n
+        p = _wrap(start + t, n)
         genes[p] = c
         pos[c] = p
 
@@ -731,7 +743,7 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
     eps = 1e-10
     k_nb = nb.shape[1]
     pos = w.pos
-    t2 = genes[(pos[t1] + 1) % n]
+    t2 = genes[_wrap(pos[t1] + 1, n)]
     d12 = data[t1, t2]
     for a in range(k_nb):
         t5 = nb[t2, a]
@@ -740,17 +752,17 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
         g1 = d12 - data[t5, t2]
         if g1 <= eps or t5 == t1:
             continue
-        l25 = (pos[t5] - pos[t2]) % n  # t2 .. t5 along the tour, before t1
-        t6 = genes[(pos[t5] + 1) % n]
+        l25 = _wrap(pos[t5] - pos[t2], n)  # t2 .. t5 along the tour, before t1
+        t6 = genes[_wrap(pos[t5] + 1, n)]
         big = g1 + data[t5, t6]
         for b in range(k_nb):
             t3 = nb[t6, b]
             if min(data[t3, t6], data[t6, t3]) >= big - eps:
                 break
-            l23 = (pos[t3] - pos[t2]) % n
+            l23 = _wrap(pos[t3] - pos[t2], n)
             if l23 >= l25:  # t3 must end the first block, before t5's block
                 continue
-            t4 = genes[(pos[t3] + 1) % n]
+            t4 = genes[_wrap(pos[t3] + 1, n)]
             gain = big - data[t3, t6] + data[t3, t4] - data[t1, t4]
             if gain > eps:
                 # blocks A = t2..t3, B = t4..t5, C = t6..t1; any two neighbouring ones
@@ -791,28 +803,28 @@ def _asymmetric_two_opt_move(t1, genes, w, n, data, nb):
     longest = min(ASYMMETRIC_FLIP, n // 2)
     for side in range(2):
         s = 1 if side == 0 else -1
-        t2 = genes[(pos[t1] + s) % n]
+        t2 = genes[_wrap(pos[t1] + s, n)]
         d12 = data[t1, t2] if s == 1 else data[t2, t1]
         for a in range(k_nb):
             t3 = nb[t2, a]
             if min(data[t2, t3], data[t3, t2]) >= d12 - eps:
                 break
-            steps = ((pos[t3] - pos[t2]) * s) % n  # the path t2 .. t4 has `steps` cities
+            steps = _wrap((pos[t3] - pos[t2]) * s, n)  # the path t2 .. t4 has `steps` cities
             if t3 == t1 or steps < 2 or steps > longest:
                 continue
-            t4 = genes[(pos[t3] - s) % n]
+            t4 = genes[_wrap(pos[t3] - s, n)]
             first = pos[t2] if s == 1 else pos[t4]  # the path in array order
             turn = 0.0  # its cost backwards minus forwards
             for k in range(steps - 1):
-                u = genes[(first + k) % n]
-                v = genes[(first + k + 1) % n]
+                u = genes[_wrap(first + k, n)]
+                v = genes[_wrap(first + k + 1, n)]
                 turn += data[v, u] - data[u, v]
             if s == 1:  # t1 t2 .. t4 t3 -> t1 t4 .. t2 t3
                 gain = d12 + data[t4, t3] - data[t1, t4] - data[t2, t3] - turn
             else:  # t3 t4 .. t2 t1 -> t3 t2 .. t4 t1
                 gain = d12 + data[t3, t4] - data[t3, t2] - data[t4, t1] - turn
             if gain > eps:
-                _flip(genes, w, n, first, (first + steps - 1) % n)
+                _flip(genes, w, n, first, _wrap(first + steps - 1, n))
                 touched = w.touched
                 touched[0], touched[1], touched[2] = t1, t2, t3
                 touched[3], touched[4], touched[5] = t4, t1, t2
@@ -953,17 +965,17 @@ def _bridge(genes, w, n, data, q1, lb, lc, ld):
     q2 = q1 + lb
     q3 = q2 + lc
     q4 = q3 + ld
-    a, b = genes[q1 % n], genes[(q1 + 1) % n]
-    c, d = genes[q2 % n], genes[(q2 + 1) % n]
-    e, f = genes[q3 % n], genes[(q3 + 1) % n]
-    g, h = genes[q4 % n], genes[(q4 + 1) % n]
+    a, b = genes[q1 % n], genes[_wrap(q1 + 1, n)]
+    c, d = genes[q2 % n], genes[_wrap(q2 + 1, n)]
+    e, f = genes[q3 % n], genes[_wrap(q3 + 1, n)]
+    g, h = genes[q4 % n], genes[_wrap(q4 + 1, n)]
     delta = (data[a, f] + data[g, d] + data[e, b] + data[c, h]
              - data[a, b] - data[c, d] - data[e, f] - data[g, h])
-    before_c = genes[(q2 - 1) % n]
-    before_e = genes[(q3 - 1) % n]
-    before_g = genes[(q4 - 1) % n]
+    before_c = genes[_wrap(q2 - 1, n)]
+    before_e = genes[_wrap(q3 - 1, n)]
+    before_g = genes[_wrap(q4 - 1, n)]
     # B C D -> [g..f][e..d][c..b] -> flip each piece back
-    _reverse_path(genes, w, n, b, genes[(q1 + 2) % n], g)
+    _reverse_path(genes, w, n, b, genes[_wrap(q1 + 2, n)], g)
     if ld > 1:
         _reverse_path(genes, w, n, g, before_g, f)
     if lc > 1:
