@@ -609,7 +609,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                         # after the 2-opt flip (t1 t4 .. t2 t3 ..), t6 is t5's
                         # predecessor there: its successor inside t2..t4, else its predecessor
                         inside = _wrap((pos[t5] - pos[t2]) * s, n) < l23
-                        t6 = genes[_wrap(pos[t5] + s, n)] if inside else genes[_wrap(pos[t5] - s, n)]
+                        t6 = genes[_wrap(pos[t5] + s, n) if inside else _wrap(pos[t5] - s, n)]
                         if t6 == t4 or t6 == t1:
                             continue
                         gain = g2 + data[t5, t6] - data[t6, t1]
