@@ -440,12 +440,13 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
 
 
 # Search settings of the jerk-limited line (see :class:`_line_kernels.LineLimits`):
-# averaging widths from 1e-3 to 2 x the acceleration-limited duration (20 log-spaced,
-# plus 10 in [0.8, 1.2] x that duration), refined by 10 golden-section steps, each
-# judged at 256 instants; the refined and the 3 best widths are measured exactly; the
-# stretch factor gets 1e-4 of slack.
+# averaging widths from 1e-3 to 2 x the acceleration-limited duration (12 log-spaced,
+# plus those beside the gaps between its largest acceleration jumps), refined by 4
+# golden-section steps, each judged at 24 evenly spaced instants and in the pieces the
+# largest jumps make; the width chosen is measured exactly; the stretch factor gets 1e-4
+# of slack.
 _TAU_RANGE = (1e-3, 2.0)
-_N_TAU, _N_GOLDEN, _N_SEARCH = 20, 10, 256
+_N_TAU, _N_GOLDEN, _N_SEARCH = 12, 4, 24
 _LINE_MARGIN = 1e-4
 
 
