@@ -17,16 +17,17 @@ Workloads (``--only`` picks some):
   lower-bound target, so that every solve runs its stall: the cost of the search per
   generation. The median over the 50 solves; ``trap30_cpu`` is the same median with the
   loop's clock read as process CPU time (less noisy on a shared machine).
-* ``tsp400``, ``tsp1600``, ``tsp3200``: CPU of ``SequencingProblem.from_matrix`` plus
-  ``solve`` at the default stop, on N uniform random points (the instance of
-  ``benchmarks/growth.py``, seed 1000 N), solve seed 0; ``tsp*_len`` is the tour length
-  over sqrt(N) (gaps: lower is better, 0.7124 is the asymptotic optimum). From their CPU
-  the growth exponent b of time = a N^b between 400 and 3200, per tree.
+* ``tsp400``, ``tsp1600``, ``tsp3200``: CPU of ``MatrixProblem`` (v0.1:
+  ``SequencingProblem.from_matrix``) plus ``solve`` at the default stop, on N uniform
+  random points (the instance of ``benchmarks/growth.py``, seed 1000 N), solve seed 0;
+  ``tsp*_len`` is the tour length over sqrt(N) (lower is better; 0.7124 is the
+  asymptotic optimum). From their CPU the growth exponent b of time = a N^b between 400
+  and 3200, per tree.
 * ``line100``, ``line300``: CPU of ``travel_times(subtasks, arm, "line")`` on planar_2r
   (joint jerk limits: today's lines are jerk-limited) and ``random_subtasks(arm, N,
   seed=0)``; ``line*_mean`` is the mean finite line time.
 * ``robotsp245``: search CPU of our solver on RoboTSP's 245 holes (``cpu['search']`` of
-  :func:`~subtask_opt.arm.serial_problem.solve_serial`, compilation apart; the data in
+  :func:`~subtask_opt.arm.serial_problem.solve_serial_problem`, compilation apart; the data in
   ``--data``); a tree without serial arms says so and has no ratio.
 
 A ratio above :data:`LIMIT` fails the run (exit 1) unless :data:`REASONS` states why for
@@ -102,12 +103,48 @@ def _clock_is_cpu() -> None:
         module.time = types.SimpleNamespace(perf_counter=time.process_time)  # type: ignore[attr-defined]
 
 
-def _random_subtasks():  # noqa: ANN202
-    try:
-        from subtask_opt.arm.tasks import random_subtasks
-    except ImportError:  # v0.1's layout
-        from subtask_opt.tasks import random_subtasks  # type: ignore[no-redef]
-    return random_subtasks
+class _Api:
+    """The names of the tree this worker imports: today's (``load_robot``, ``ArmProblem``,
+    ``MatrixProblem``, ``solve_serial_problem``) or v0.1's (``load_arm``,
+    ``SequencingProblem``, ``from_matrix``, ``solve_serial``)."""
+
+    def __init__(self) -> None:
+        import subtask_opt as so
+
+        self.so = so
+        self.today = hasattr(so, "ArmProblem")
+
+    def planar_arm(self, name: str) -> Any:
+        """(the object ``builtin_case`` and ``travel_times`` take, the robot a problem takes)"""
+        if self.today:
+            robot = self.so.load_robot(name)
+            return robot.model, robot
+        arm = self.so.load_arm(name)
+        return arm, arm
+
+    def planar_problem(self, subtasks: Any, robot: Any, **options: Any) -> Any:
+        if self.today:
+            return self.so.ArmProblem(subtasks, robot, **options)
+        return self.so.SequencingProblem(subtasks, robot, **options)
+
+    def matrix_problem(self, m: Any) -> Any:
+        if self.today:
+            return self.so.MatrixProblem(m)
+        return self.so.SequencingProblem.from_matrix(m)
+
+    def random_subtasks(self) -> Any:
+        try:
+            from subtask_opt.arm.tasks import random_subtasks
+        except ImportError:  # v0.1's layout
+            from subtask_opt.tasks import random_subtasks  # type: ignore[no-redef]
+        return random_subtasks
+
+    def travel_times(self) -> Any:
+        try:
+            from subtask_opt.arm.timing.models import travel_times
+        except ImportError:  # v0.1's layout
+            from subtask_opt.timing import travel_times  # type: ignore[no-redef]
+        return travel_times
 
 
 def _uniform(n: int, seed: int):  # noqa: ANN202
@@ -118,27 +155,20 @@ def _uniform(n: int, seed: int):  # noqa: ANN202
 
 
 def _trap30(cpu_clock: bool) -> dict[str, Any]:
-    from subtask_opt import (
-        MaxGenerations,
-        NoImprovement,
-        SequencingProblem,
-        builtin_case,
-        load_arm,
-        solve,
-    )
-
+    api = _Api()
+    so = api.so
     if cpu_clock:
         _clock_is_cpu()
-    arm = load_arm("planar_2r")
-    problems = [SequencingProblem(builtin_case("random30", arm, seed=g), arm,
-                                  time_model="trapezoid", configurations="fixed")
+    arm, robot = api.planar_arm("planar_2r")
+    problems = [api.planar_problem(so.builtin_case("random30", arm, seed=g), robot,
+                                   time_model="trapezoid", configurations="fixed")
                 for g in range(10)]
-    stop = [NoImprovement(15), MaxGenerations(50_000)]
-    solve(problems[0], seed=0, stop=stop)  # kernels loaded (or compiled) first
+    stop = [so.NoImprovement(15), so.MaxGenerations(50_000)]
+    so.solve(problems[0], seed=0, stop=stop)  # kernels loaded (or compiled) first
     times, generations, total = [], 0, 0.0
     for problem in problems:
         for seed in range(5):
-            result = solve(problem, seed=seed, stop=stop)
+            result = so.solve(problem, seed=seed, stop=stop)
             times.append(result.runtime_s)
             generations += result.generations
             total += result.total_time
@@ -147,14 +177,11 @@ def _trap30(cpu_clock: bool) -> dict[str, Any]:
 
 
 def _tsp(n: int) -> dict[str, Any]:
-    import numpy as np
-
-    from subtask_opt import SequencingProblem, solve
-
-    solve(SequencingProblem.from_matrix(_uniform(150, 1)), seed=0)  # kernels, candidates
+    api = _Api()
+    api.so.solve(api.matrix_problem(_uniform(150, 1)), seed=0)  # kernels, candidates
     m = _uniform(n, 1000 * n)
     t0 = time.process_time()
-    result = solve(SequencingProblem.from_matrix(m), seed=0)
+    result = api.so.solve(api.matrix_problem(m), seed=0)
     cpu = time.process_time() - t0
     return {"value": cpu, "len": result.total_time / math.sqrt(n),
             "generations": result.generations}
@@ -163,10 +190,9 @@ def _tsp(n: int) -> dict[str, Any]:
 def _line(n: int) -> dict[str, Any]:
     import numpy as np
 
-    from subtask_opt import load_arm, travel_times
-
-    random_subtasks = _random_subtasks()
-    arm = load_arm("planar_2r")
+    api = _Api()
+    random_subtasks, travel_times = api.random_subtasks(), api.travel_times()
+    arm, _ = api.planar_arm("planar_2r")
     travel_times(random_subtasks(arm, 4, seed=1), arm, "line")  # kernels
     subtasks = random_subtasks(arm, n, seed=0)
     t0 = time.process_time()
@@ -185,9 +211,13 @@ def _robotsp(data: Path) -> dict[str, Any]:
         from subtask_opt.arm.robotsp_bench import HOME_DEG, _load
         from subtask_opt.arm.scene import Scene
         from subtask_opt.arm.serial import load_serial_arm
-        from subtask_opt.arm.serial_problem import SerialProblem, solve_serial
+        from subtask_opt.arm.serial_problem import SerialProblem
     except ImportError as exc:
         return {"unavailable": f"no serial arms in this tree ({exc.name})"}
+    try:
+        from subtask_opt.arm.serial_problem import solve_serial_problem as solve_serial
+    except ImportError:  # before the #26 refactor
+        from subtask_opt.arm.serial_problem import solve_serial  # type: ignore[no-redef]
     folder = data / "robotsp"
     rows, subsets, _ = _load(folder)
     arm = load_serial_arm("vs060_drill", limits="robotsp")
@@ -201,7 +231,8 @@ def _robotsp(data: Path) -> dict[str, Any]:
 
     solve_serial(problem("25"), seed=0)  # kernels loaded (or compiled) first
     result = solve_serial(problem("245"), seed=0)
-    return {"value": result.cpu["search"], "compile": result.cpu.get("compile", 0.0),
+    cpu = getattr(result, "cpu", None) or result.report.cpu
+    return {"value": cpu["search"], "compile": cpu.get("compile", 0.0),
             "executed_time": result.total_time}
 
 
@@ -334,11 +365,14 @@ def table(summary: dict[str, Any]) -> str:
              f"{summary['load_average']:.1f} on {summary['cpus']} CPUs",
              f"{'workload':<14} {'older':>10} {'today':>10} {'ratio':>7}  note"]
     for name, r in summary["workloads"].items():
-        unit = "" if name.endswith("_len") else " s"
+        seconds = not name.endswith("_len")
 
-        def fmt(v: float | None) -> str:
-            return "-" if v is None else (f"{v:.5f}" if not unit else
-                                          (f"{v * 1e3:.2f} ms" if v < 1.0 else f"{v:.3f} s"))
+        def fmt(v: float | None, seconds: bool = seconds) -> str:
+            if v is None:
+                return "-"
+            if not seconds:
+                return f"{v:.5f}"
+            return f"{v * 1e3:.2f} ms" if v < 1.0 else f"{v:.3f} s"
 
         ratio = "n/a" if r["ratio"] is None else f"{r['ratio']:.2f}x"
         note = r["note"] or ""

@@ -32,7 +32,7 @@ GA dispatch registers; they branch on ``aux.search``.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -153,10 +153,12 @@ def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 
 # exit, two atomic operations per array and call (the 2-/3-opt move takes ten arrays and
 # runs once per city popped from the queue); without them a move that finds nothing costs
 # half as much (random30: 290 -> 165 ns for the 3-opt move, 275 -> 135 ns for Or-opt).
-# (copy_run and reverse_run, in subtask_opt.ga.genes, are inlined.)
+# (copy_run and reverse_run, in subtask_opt.ga.genes, are inlined.) ``_nrt`` is a private
+# option numba's type stubs do not list, hence the mapping.
+NO_NRT: dict[str, Any] = {"_nrt": False}
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def tour_cost(genes, length, data, aux):
     """Cost of the closed tour genes[0] -> ... -> genes[length-1] -> genes[0]."""
     total = 0.0
@@ -180,7 +182,7 @@ def random_tour(genes, data, aux, rng, best, best_len):
     return n
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _two_nearest_unused(current, data, used, row):
     """The nearest and second-nearest cities from ``current`` that are not ``used``
     (-1: none), among ``row`` (its neighbour list) or, when fewer than two of those are
@@ -320,7 +322,7 @@ def no_improvement(genes, length, data, aux):
     return length
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _prefix_costs(tour, n, data, fwd, bwd):
     """fwd[i] = cost of tour[0] -> ... -> tour[i]; bwd the same path walked backwards."""
     fwd[0] = 0.0
@@ -330,7 +332,7 @@ def _prefix_costs(tour, n, data, fwd, bwd):
         bwd[i] = bwd[i - 1] + data[tour[i], tour[i - 1]]
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _two_opt_pass(tour, n, data, fwd, bwd):
     """One sweep of first-improvement 2-opt, exact for asymmetric costs.
 
@@ -359,7 +361,7 @@ def _two_opt_pass(tour, n, data, fwd, bwd):
     return moved
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _or_opt_pass(tour, n, data, fwd, bwd, scratch, max_seg):
     """One sweep of first-improvement segment insertion (Or-opt generalised).
 
@@ -454,7 +456,7 @@ def _wrap(x, n):
     return x
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _reverse(tour, pos, n, i, j):
     """Reverse the cyclic run tour[i..j] (or its complement, same cycle).
 
@@ -472,7 +474,7 @@ def _reverse(tour, pos, n, i, j):
         j = _wrap(j - 1, n)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _flip(genes, w, n, i, j):
     """:func:`_reverse` of positions i..j, written to the undo log ``w.log`` (when the
     log is full, ``w.state[3]`` is set and later flips are not logged)."""
@@ -486,7 +488,7 @@ def _flip(genes, w, n, i, j):
         w.state[3] = 1
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _undo(genes, w, n):
     """Undo the logged flips, newest first; False if the log overflowed (nothing undone)."""
     if w.state[3] != 0:
@@ -497,7 +499,7 @@ def _undo(genes, w, n):
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _shift_run(tour, pos, n, i, seg, x_pos, run):
     """Move the run tour[i..i+seg-1] to just after position x_pos (outside the run),
     same direction, shifting the cities on the shorter side between them (a flip
@@ -528,7 +530,7 @@ def _shift_run(tour, pos, n, i, seg, x_pos, run):
         pos[run[t]] = p
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _move_run(genes, w, n, i, seg, x_pos, reverse):
     """Move the run genes[i..i+seg-1] to just after position x_pos (outside the run),
     reversed or not: two or three flips over the shorter stretch between them."""
@@ -555,7 +557,7 @@ def _move_run(genes, w, n, i, seg, x_pos, reverse):
         _reverse_path(genes, w, n, s1, before_s1, s0)
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _push(queue, queued, state, n, city):
     """Append ``city`` to the circular queue unless it is in it (state = [head, tail])."""
     if not queued[city]:
@@ -564,7 +566,7 @@ def _push(queue, queued, state, n, city):
         state[1] += 1
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _reverse_path(genes, w, n, u, u2, v):
     """Flip the tour path from ``u`` (whose next city on the path is ``u2``) to ``v``,
     whichever way round it lies in the array."""
@@ -574,7 +576,7 @@ def _reverse_path(genes, w, n, u, u2, v):
         _flip(genes, w, n, w.pos[v], w.pos[u])
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _three_opt_move(t1, genes, w, n, data, nb):
     """Apply the first improving sequential 2-opt or 3-opt move that starts by
     removing an edge at ``t1`` (Or-3opt, "or2opt" and "or3opt" of LK: each new edge
@@ -684,7 +686,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
     return 0.0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     """Apply the first improving move of a run of 1..max_seg cities starting or
     ending at ``a`` next to one of the nearest cities of its end points (either
@@ -734,7 +736,7 @@ def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     return 0.0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _swap_blocks(genes, pos, n, start, len1, len2, scratch):
     """Rewrite the cyclic run of ``len1`` then ``len2`` cities from position ``start`` as
     the second block then the first, each in its own direction."""
@@ -747,7 +749,7 @@ def _swap_blocks(genes, pos, n, start, len1, len2, scratch):
         pos[c] = p
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _segment_exchange_move(t1, genes, w, n, data, nb):
     """Apply the first improving segment exchange that removes the edge t1 -> t2 (the
     pure 3-opt move that keeps every direction of travel, so it is exact for
@@ -804,7 +806,7 @@ the bound keeps a move's price O(1) in N; in benchmarks/growth.py --asymmetric, 
 1-2% longer tours at N = 200 to 1600 and no bound twice the time at N = 1600)."""
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _asymmetric_two_opt_move(t1, genes, w, n, data, nb):
     """Apply the first improving 2-opt move that removes an edge at ``t1`` and reverses
     a path of at most :data:`ASYMMETRIC_FLIP` cities (and at most half the tour, so the
@@ -869,7 +871,7 @@ def _work(genes, n):
                  np.empty((1024, 2), dtype=np.int64), np.empty(n, dtype=np.int64))
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _polish(genes, n, data, aux, w, symmetric):
     """Improve from the queued cities until no queued city has an improving move;
     return the total gain. Symmetric costs: LK-style moves, then Or-opt; else
@@ -971,7 +973,7 @@ def asymmetric_local_search(genes, length, data, aux):
     return length
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, **NO_NRT)
 def _bridge(genes, w, n, data, q1, lb, lc, ld):
     """The double bridge after position ``q1``: the next three segments B, C, D of
     ``lb``, ``lc``, ``ld`` cities (together fewer than n) put back as D C B (four edges

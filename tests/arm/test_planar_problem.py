@@ -118,7 +118,7 @@ def test_choosing_configurations_makes_several_shorter_runs(arm):
 
 
 def test_the_default_stop_caps_the_generations_from_1000_nodes():
-    from subtask_opt.arm.sequencing import generation_cap
+    from subtask_opt.tour.solve import generation_cap
 
     def cap(n: int) -> int:
         (limit,) = [c for c in SolverParams().default_stop(n) if isinstance(c, MaxGenerations)]

@@ -281,7 +281,7 @@ def test_candidate_table_picks_alpha_only_for_finite_symmetric_and_large():
 
 
 def test_candidate_table_takes_the_nearest_again_from_alpha_until():
-    from subtask_opt.arm.bound import ALPHA_UNTIL
+    from subtask_opt.tour.bound import ALPHA_UNTIL
 
     pts = np.random.default_rng(8).random((ALPHA_UNTIL, 2)) * 100
     m = _euclidean(pts)
