@@ -277,10 +277,17 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     n = len_a
     succ_a = np.empty(n, dtype=np.int64)
     succ_b = np.empty(n, dtype=np.int64)
+    return _greedy_child(genes_a, genes_b, n, data, aux, rng, child, succ_a, succ_b,
+                         np.zeros(n, dtype=np.bool_))
+
+
+@njit(cache=True)
+def _greedy_child(genes_a, genes_b, n, data, aux, rng, child, succ_a, succ_b, used):
+    """:func:`greedy_crossover` in the caller's scratch: ``succ_a``, ``succ_b`` (n,) get
+    the parents' successors (the caller may read them after), ``used`` (n,) is all False."""
     for i in range(n):
-        succ_a[genes_a[i]] = genes_a[(i + 1) % n]
-        succ_b[genes_b[i]] = genes_b[(i + 1) % n]
-    used = np.zeros(n, dtype=np.bool_)
+        succ_a[genes_a[i]] = genes_a[_wrap(i + 1, n)]
+        succ_b[genes_b[i]] = genes_b[_wrap(i + 1, n)]
     current = genes_a[0] if rng.random() < 0.5 else genes_b[0]
     child[0] = current
     used[current] = True
@@ -337,14 +344,16 @@ def _two_opt_pass(tour, n, data, fwd, bwd):
     """One sweep of first-improvement 2-opt, exact for asymmetric costs.
 
     After a move the sweep goes on from the same position (prefix costs
-    refreshed) rather than starting over. True if anything moved.
+    refreshed) rather than starting over. True if anything moved. ``i = -1`` (``a`` the
+    last city) reverses runs that start at position 0: with asymmetric costs that is not
+    the reversal of the rest of the tour.
     """
     eps = 1e-12
     moved = False
-    for i in range(n - 2):
+    for i in range(-1, n - 2):
         j = i + 2
         while j < (n if i > 0 else n - 1):
-            a, b = tour[i], tour[i + 1]
+            a, b = tour[i if i >= 0 else n - 1], tour[i + 1]
             c, d = tour[j], tour[(j + 1) % n]
             # reverse tour[i+1 .. j]
             old = data[a, b] + data[c, d] + (fwd[j] - fwd[i + 1])
@@ -577,7 +586,7 @@ def _reverse_path(genes, w, n, u, u2, v):
 
 
 @njit(cache=True, **NO_NRT)
-def _three_opt_move(t1, genes, w, n, data, nb):
+def _three_opt_move(t1, genes, w, n, data, nb, deep):
     """Apply the first improving sequential 2-opt or 3-opt move that starts by
     removing an edge at ``t1`` (Or-3opt, "or2opt" and "or3opt" of LK: each new edge
     joins a chain end to one of its nearest cities and the partial gain stays
@@ -586,7 +595,8 @@ def _three_opt_move(t1, genes, w, n, data, nb):
     With t2 next to t1 (direction ``s``), t3 near t2 and t4 next to t3:
     t4 behind t3 is a 2-opt move, and a third edge (t5 near t4, t6 next to t5)
     makes the 3-opt moves; t4 ahead of t3 splits off the cycle t2..t3, which a
-    third edge inside it rejoins (a segment move, reversed or not).
+    third edge inside it rejoins (a segment move, reversed or not). Without ``deep``
+    only the 2-opt moves are tried (see :data:`THREE_OPT_FROM`).
     """
     eps = 1e-10
     k_nb = nb.shape[1]
@@ -616,6 +626,8 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                         touched[0], touched[1], touched[2], touched[3] = t1, t2, t3, t4
                         touched[4], touched[5] = t1, t2
                         return gain
+                    if not deep:
+                        continue
                     for c in range(k_nb):
                         t5 = nb[t4, c]
                         g2 = big - data[t4, t5]
@@ -640,7 +652,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                             touched[0], touched[1], touched[2] = t1, t2, t3
                             touched[3], touched[4], touched[5] = t4, t5, t6
                             return gain
-                else:  # t4 ahead of t3: the cycle t2..t3 must be rejoined inside
+                elif deep:  # t4 ahead of t3: the cycle t2..t3 must be rejoined inside
                     t4 = genes[_wrap(pos[t3] + s, n)]
                     if t4 == t1:
                         continue
@@ -800,6 +812,14 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
     return 0.0
 
 
+THREE_OPT_FROM = 100
+"""Fewest cities for which the symmetric search tries 3-opt moves (:func:`_three_opt_move`);
+below, 2-opt and Or-opt moves as in v0.1. On random30 (trapezoid, 10 sets x 5 seeds,
+stall 15) the 3-opt moves cost a quarter of the search per generation (97 against 72 us)
+for the same 50 tour times; they pay on large tours (with the kicks of
+:data:`KICKS_FROM`, where the iterated search lives on them)."""
+
+
 ASYMMETRIC_FLIP = 150
 """Longest path the asymmetric 2-opt move reverses (its cost change is a sum along it, so
 the bound keeps a move's price O(1) in N; in benchmarks/growth.py --asymmetric, 50 gave
@@ -859,16 +879,37 @@ class _Work(NamedTuple):
     touched: np.ndarray  # the cities the last move or kick changed
     log: np.ndarray  # (L, 2) position pairs of the flips since the log was cleared
     scratch: np.ndarray  # n cities, for block swaps
+    spare: np.ndarray  # n cities, for the caller (the active cities of a polish)
+
+
+LOG_FLIPS = 1024
+"""Flips the undo log of an iterated local search holds (:func:`_flip`)."""
 
 
 @njit(cache=True)
 def _work(genes, n):
-    pos = np.empty(n, dtype=np.int64)
+    """The scratch of a local search over ``genes[:n]``: :func:`_scratch` with ``pos``
+    filled."""
+    w = _scratch(n)
     for i in range(n):
-        pos[genes[i]] = i
-    return _Work(pos, np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
-                 np.zeros(4, dtype=np.int64), np.empty(8, dtype=np.int64),
-                 np.empty((1024, 2), dtype=np.int64), np.empty(n, dtype=np.int64))
+        w.pos[genes[i]] = i
+    return w
+
+
+@njit(cache=True)
+def _scratch(n):
+    """The scratch of a local search over n cities (``pos`` not filled, the queue empty,
+    ``queued`` all False), its integer rows views of one allocation: allocating each
+    apart cost a 30-city generation about a tenth of its time (two allocations instead of
+    eight per polish)."""
+    buf = np.empty(4 * n + 12 + 2 * LOG_FLIPS, dtype=np.int64)
+    pos = buf[:n]
+    state = buf[4 * n:4 * n + 4]
+    for k in range(4):
+        state[k] = 0
+    log = buf[4 * n + 12:].reshape((LOG_FLIPS, 2))
+    return _Work(pos, buf[n:2 * n], np.zeros(n, dtype=np.bool_), state,
+                 buf[4 * n + 4:4 * n + 12], log, buf[2 * n:3 * n], buf[3 * n:4 * n])
 
 
 @njit(cache=True, **NO_NRT)
@@ -878,6 +919,7 @@ def _polish(genes, n, data, aux, w, symmetric):
     segment exchanges, short 2-opt flips priced exactly, and Or-opt without reversal."""
     nb = aux.neighbours
     max_seg = min(aux.max_segment, n - 3)
+    deep = n >= THREE_OPT_FROM
     gain_total = 0.0
     # every move lowers the cost; the budget only guarantees termination if a
     # caller breaks the contract (e.g. calls the symmetric search on asymmetric costs)
@@ -890,7 +932,7 @@ def _polish(genes, n, data, aux, w, symmetric):
         moved = 0
         gain = 0.0
         if symmetric:
-            gain = _three_opt_move(a, genes, w, n, data, nb)
+            gain = _three_opt_move(a, genes, w, n, data, nb, deep)
         else:
             gain = _segment_exchange_move(a, genes, w, n, data, nb)
             if gain <= 0.0:
@@ -922,10 +964,17 @@ def local_search_around(genes, length, data, aux, active, n_active):
     A city whose moves all fail goes idle until a move changes one of its tour
     neighbours, so polishing a tour that changed in a few places costs little.
     """
-    n = length
-    if n < 8:
+    if length < 8:
         return exact_local_search(genes, length, data, aux)
-    w = _work(genes, n)
+    return _search_around(genes, length, data, aux, active, n_active, _work(genes, length))
+
+
+@njit(cache=True)
+def _search_around(genes, n, data, aux, active, n_active, w):
+    """:func:`local_search_around` in the scratch ``w`` (:func:`_work` of ``genes``, its
+    ``queued`` all False; ``active`` may be ``w.spare``)."""
+    if n < 8:
+        return exact_local_search(genes, n, data, aux)
     for i in range(n_active):
         _push(w.queue, w.queued, w.state, n, active[i])
     _polish(genes, n, data, aux, w, True)
@@ -1094,10 +1143,11 @@ def bridged_best(genes, data, aux, rng, best):
     for i in range(p3, n):
         genes[k] = best[i]
         k += 1
-    pos = np.empty(n, dtype=np.int64)
+    w = _scratch(n)
+    pos = w.scratch  # in the best tour
     for i in range(n):
         pos[best[i]] = i
-    active = np.empty(n, dtype=np.int64)
+    active = w.spare
     m = 0
     for i in range(n):  # the cities whose successor changed, and those successors
         a = genes[i]
@@ -1106,7 +1156,9 @@ def bridged_best(genes, data, aux, rng, best):
             active[m] = a
             active[m + 1] = b
             m += 2
-    return local_search_around(genes, n, data, aux, active, m)
+    for i in range(n):
+        w.pos[genes[i]] = i
+    return _search_around(genes, n, data, aux, active, m, w)
 
 
 @njit(cache=True)
@@ -1115,24 +1167,27 @@ def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, ch
     then an iterated local search of ``aux.kicks`` kicks. A child longer than the
     better parent is replaced by that parent (before the iterated search), so
     children never fall behind their parents."""
-    n = greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
-    succ_a = np.empty(n, dtype=np.int64)
-    succ_b = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        succ_a[genes_a[i]] = genes_a[(i + 1) % n]
-        succ_b[genes_b[i]] = genes_b[(i + 1) % n]
-    active = np.empty(n, dtype=np.int64)
+    n = len_a
+    # one allocation for the crossover's and the local search's scratch (see _scratch)
+    w = _scratch(n)
+    succ_a = w.scratch
+    succ_b = w.queue
+    active = w.spare
+    _greedy_child(genes_a, genes_b, n, data, aux, rng, child, succ_a, succ_b, w.queued)
+    for i in range(n):  # the scratch made ready for the local search of the child
+        w.pos[child[i]] = i
+        w.queued[i] = False
     m = 0
     for i in range(n):
         u = child[i]
-        v = child[(i + 1) % n]
+        v = child[_wrap(i + 1, n)]
         parental = (succ_a[u] == v or succ_a[v] == u or succ_b[u] == v or succ_b[v] == u)
         if not parental and m + 2 <= n:
             active[m] = u
             active[m + 1] = v
             m += 2
     if m > 0:
-        local_search_around(child, n, data, aux, active, m)
+        _search_around(child, n, data, aux, active, m, w)
     cost_a = tour_cost(genes_a, n, data, aux)
     cost_b = tour_cost(genes_b, n, data, aux)
     better = genes_a if cost_a <= cost_b else genes_b
