@@ -125,8 +125,8 @@ def test_the_default_stop_caps_the_generations_from_1000_nodes():
         return limit.generations
 
     assert [cap(n) for n in (30, 999, 1000, 1280, 1600, 3200, 20_000)] == [
-        50_000, 50_000, 64, 50, 40, 40, 40]
-    assert generation_cap(3200) == 40
+        50_000, 50_000, 64, 50, 40, 20, 20]
+    assert generation_cap(3200) == 20 and generation_cap(2400) == 26
     assert SolverParams.paper().default_stop(3200)[1] == MaxGenerations(50_000)
 
 
