@@ -18,8 +18,9 @@ chromosome type):
   bridge, or polished
   randomised nearest-neighbour tours; children of the greedy crossover are
   polished around the edges neither parent has, then searched the same way. The
-  local search makes sequential 2-opt and 3-opt moves (Or-3opt) and Or-opt moves
-  on neighbour lists, with don't-look bits (a queue of active cities);
+  local search makes sequential 2-opt and (from :data:`THREE_OPT_FROM` cities)
+  3-opt moves (Or-3opt) and Or-opt moves on neighbour lists, with don't-look bits
+  (a queue of active cities);
 * :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and a
   local search of segment exchanges and Or-opt moves on neighbour lists (moves
   that keep every direction of travel, so their cost change is exact) and short
