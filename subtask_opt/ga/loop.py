@@ -268,6 +268,12 @@ def _edges_converged(pop, lengths, costs, tol, directed):
     return differ <= tol * (n_pop - 1) * n
 
 
+IMPROVEMENT_RTOL = 1e-9
+"""A new best cost restarts the stall count only when it is this share below the old one
+(the tolerance of :meth:`~subtask_opt.base.results.History.generation_of_best`): a tour
+rotated or reversed sums its legs in another order, a few ulps apart."""
+
+
 @njit(cache=True)
 def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, params, rng,
            n_gens, stall_limit, target, hist_best, hist_mean, hist_restart):
@@ -401,10 +407,13 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
         counters[_GEN] += 1
         i_best = np.argmin(costs)
         if costs[i_best] < best_cost[0]:
+            # a stall counts generations without a real improvement: the same tour summed
+            # from another start can come out an ulp shorter (IMPROVEMENT_RTOL)
+            if costs[i_best] < best_cost[0] - IMPROVEMENT_RTOL * abs(best_cost[0]):
+                counters[_LAST_IMPROVE] = counters[_GEN]
             best_cost[0] = costs[i_best]
             counters[_BEST_LEN] = lengths[i_best]
             copy_run(best, 0, pop[i_best], 0, lengths[i_best])
-            counters[_LAST_IMPROVE] = counters[_GEN]
         hist_best[step] = best_cost[0]
         hist_mean[step] = np.mean(costs)
         hist_restart[step] = 0
