@@ -6,16 +6,18 @@ offset of up to ``0.2 / sqrt(N)``, about a third of a typical tour edge, so the
 matrix is asymmetric and the solve takes its any-costs search) are solved
 with the default parameters and the default stop
 (:meth:`subtask_opt.SolverParams.default_stop`), one seed each. Printed per N:
-median wall time of ``MatrixProblem`` (matrix checks and the
-neighbour table, an O(N^2) argpartition), of ``solve`` and their sum, the
+median CPU time of ``MatrixProblem`` (matrix checks), of ``solve`` (the candidate
+lists, an O(N^2) argpartition or alpha-nearness, and the search) and their sum,
+numba's compiling or loading of kernels inside them apart (``compile s``: the
+warm-up at N = 20 leaves e.g. the alpha-nearness kernels to the first N >= 100), the
 median number of generations, the tour length over sqrt(N) (about 0.7124 for
 optimal tours of many uniform points, the Beardwood-Halton-Hammersley constant;
 a yardstick where there is no bound) and against the Held-Karp bound where it is
 computed (N <= ``bound_max_nodes``). Then the exponent b of a
 least-squares fit time = a N^b over all N, for the solve and the build.
 
-Times are wall times after JIT warm-up; the machine may be shared and busy
-(the load average is printed), so compare within one run.
+Times are process CPU times (a busy machine's waiting left out); the machine may be
+shared and busy (the load average is printed), so compare within one run.
 
     python benchmarks/growth.py [--sizes 100,200,400,800,1600,3200] [--seeds 3] [--asymmetric]
 """
@@ -30,6 +32,7 @@ import time
 import numpy as np
 
 from subtask_opt import solve
+from subtask_opt._kernel_cache import compile_seconds
 from subtask_opt.tour.problem import MatrixProblem
 
 
@@ -60,20 +63,23 @@ def main() -> None:
     sizes = [int(s) for s in args.sizes.split(",")]
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
     solve(MatrixProblem(_instance(20, 0, args.asymmetric)), seed=0)  # JIT warm-up
-    print(f"{'N':>6} {'build s':>8} {'solve s':>8} {'total s':>8} {'gens':>6} "
-          f"{'len/sqrtN':>9} {'gap to bound':>12}")
+    print(f"{'N':>6} {'build s':>8} {'solve s':>8} {'total s':>8} {'compile s':>9} "
+          f"{'gens':>6} {'len/sqrtN':>9} {'gap to bound':>12}")
     builds, solves = [], []
     for n in sizes:
-        b, s, g, gaps, lengths = [], [], [], [], []
+        b, s, c, g, gaps, lengths = [], [], [], [], [], []
         for seed in range(args.seeds):
             m = _instance(n, 1000 * n + seed, args.asymmetric)
-            t0 = time.perf_counter()
-            problem = MatrixProblem(m)
-            t1 = time.perf_counter()
-            result = solve(problem, seed=seed)
-            t2 = time.perf_counter()
-            b.append(t1 - t0)
-            s.append(t2 - t1)
+            t0 = time.process_time()
+            with compile_seconds() as built:
+                problem = MatrixProblem(m)
+            t1 = time.process_time()
+            with compile_seconds() as solved:
+                result = solve(problem, seed=seed)
+            t2 = time.process_time()
+            b.append(t1 - t0 - built[0])
+            s.append(t2 - t1 - solved[0])
+            c.append(built[0] + solved[0])
             g.append(result.generations)
             lengths.append(result.total_time / np.sqrt(n))
             if result.lower_bound is not None:
@@ -82,7 +88,8 @@ def main() -> None:
         solves.append(statistics.median(s))
         gap = f"{100 * statistics.median(gaps):11.2f}%" if gaps else f"{'-':>12}"
         print(f"{n:>6} {builds[-1]:8.3f} {solves[-1]:8.3f} {builds[-1] + solves[-1]:8.3f} "
-              f"{statistics.median(g):6.0f} {statistics.median(lengths):9.4f} {gap}", flush=True)
+              f"{max(c):9.3f} {statistics.median(g):6.0f} {statistics.median(lengths):9.4f} "
+              f"{gap}", flush=True)
     print(f"fitted exponent (time ~ N^b): solve b = {fit_exponent(sizes, solves):.2f}, "
           f"build b = {fit_exponent(sizes, builds):.2f}")
 

@@ -146,6 +146,40 @@ def test_the_package_level_holds_only_while_its_own_kernels_compile(monkeypatch)
     assert numba.config.OPT == 3 and numba.config.OPT.is_opt_max is False
 
 
+_LOAD = """
+import sys
+from numba.core import event
+from subtask_opt import _kernel_cache
+sys.path.insert(0, sys.argv[1])
+import cached_kernel  # defines a cache=True kernel
+
+compiles = []
+class Compiles(event.Listener):
+    def on_start(self, ev):
+        compiles.append(ev.data["dispatcher"].py_func.__name__)
+    def on_end(self, ev):
+        pass
+event.register("numba:compile", Compiles())
+with _kernel_cache.compile_seconds() as spent:
+    cached_kernel.f(1.0)
+print(len(compiles), spent[0] > 0.0)
+"""
+
+
+@pytest.mark.skipif(REDUCED, reason="NUMBA_DISABLE_JIT: nothing is compiled or loaded")
+def test_compile_seconds_counts_a_kernel_loaded_from_the_cache(tmp_path):
+    (tmp_path / "cached_kernel.py").write_text(
+        "from numba import njit\n\n@njit(cache=True)\ndef f(x):\n    return x * 2.0\n")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               SUBTASK_OPT_CACHE_DIR=str(tmp_path / "ours"))
+    runs = [subprocess.run([sys.executable, "-c", _LOAD, str(tmp_path)], env=env,
+                           capture_output=True, text=True, timeout=300, cwd=PROJECT_ROOT)
+            for _ in range(2)]
+    assert [r.returncode for r in runs] == [0, 0], runs[0].stderr
+    # compiled in the first process, loaded from the cache in the second: counted both times
+    assert [r.stdout.split() for r in runs] == [["1", "True"], ["0", "True"]]
+
+
 def test_compile_seconds_counts_compilation_only() -> None:
     from numba import njit
 

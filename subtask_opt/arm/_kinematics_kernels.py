@@ -128,22 +128,16 @@ def _within(q: float, lo: float, up: float) -> bool:
 
 
 @njit(cache=True)
-def ik_point(kin: ArmKinematics, x: float, y: float, branch: int, out: np.ndarray) -> int:
-    """Analytic IK of one point on one branch into ``out`` (2,).
-
-    Returns 0 if feasible, 1 if the point is outside the annulus, 2 if the
-    branch breaks joint 1's limit, 3 joint 2's (``out`` still holds the
-    closest representatives then).
-    """
+def ik_values(kin: ArmKinematics, x: float, y: float, branch: int) -> tuple[int, float, float]:
+    """:func:`ik_point` as ``(status, q1, q2)``: scalars only, so a loop that calls it moves
+    no array references (numba counts them, atomically, on every call)."""
     dx = x - kin.base_x
     dy = y - kin.base_y
     l1 = kin.l1
     l2 = kin.l2
     c = (dx * dx + dy * dy - l1 * l1 - l2 * l2) / (2.0 * l1 * l2)
     if c > 1.0 + _TOL or c < -1.0 - _TOL:
-        out[0] = np.nan
-        out[1] = np.nan
-        return 1
+        return 1, np.nan, np.nan
     c = min(1.0, max(-1.0, c))
     s = math.sqrt(1.0 - c * c)
     if branch == 1:
@@ -152,13 +146,25 @@ def ik_point(kin: ArmKinematics, x: float, y: float, branch: int, out: np.ndarra
     t1 = math.atan2(dy, dx) - math.atan2(l2 * s, l1 + l2 * c)
     q1 = _fit_limits(kin.s1 * (t1 - kin.a1), kin.lower1, kin.upper1)
     q2 = _fit_limits(kin.s2 * (b - kin.a2), kin.lower2, kin.upper2)
+    if not _within(q1, kin.lower1, kin.upper1):
+        return 2, q1, q2
+    if not _within(q2, kin.lower2, kin.upper2):
+        return 3, q1, q2
+    return 0, q1, q2
+
+
+@njit(cache=True)
+def ik_point(kin: ArmKinematics, x: float, y: float, branch: int, out: np.ndarray) -> int:
+    """Analytic IK of one point on one branch into ``out`` (2,).
+
+    Returns 0 if feasible, 1 if the point is outside the annulus, 2 if the
+    branch breaks joint 1's limit, 3 joint 2's (``out`` still holds the
+    closest representatives then).
+    """
+    status, q1, q2 = ik_values(kin, x, y, branch)
     out[0] = q1
     out[1] = q2
-    if not _within(q1, kin.lower1, kin.upper1):
-        return 2
-    if not _within(q2, kin.lower2, kin.upper2):
-        return 3
-    return 0
+    return status
 
 
 @njit(cache=True)

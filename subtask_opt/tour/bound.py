@@ -447,17 +447,23 @@ tour out of the 8 alpha-nearest lists (the default schedule's: 3; the 8 nearest:
 
 ALPHA_FROM = 100
 """Fewest cities for which :func:`candidate_table` picks alpha-nearness."""
+ALPHA_UNTIL = 2000
+"""Cities from which :func:`candidate_table` takes the nearest again: its 50 ascent steps
+cost O(N^2) each, 1.8-1.9 s of CPU at N = 3200 (0.37 s at 1600), where a search of 40
+generations on the nearest lists ends 0.1-0.2% longer in 1.3 s less (uniform points,
+benchmarks/regress.py's instances)."""
 
 
 def candidate_table(matrix: np.ndarray, k: int) -> np.ndarray:
     """The local search's candidate lists: alpha-nearest (:func:`alpha_neighbour_table`)
-    for a finite symmetric matrix of at least :data:`ALPHA_FROM` cities, else the
-    nearest (:func:`~subtask_opt.tour.permutation.neighbour_table`)."""
+    for a finite symmetric matrix of :data:`ALPHA_FROM` to :data:`ALPHA_UNTIL` cities,
+    else the nearest (:func:`~subtask_opt.tour.permutation.neighbour_table`)."""
     from subtask_opt.tour.permutation import neighbour_table
 
     m = np.asarray(matrix, dtype=float)
     off = ~np.eye(m.shape[0], dtype=bool)
-    if m.shape[0] < ALPHA_FROM or not np.all(np.isfinite(m[off])) or not is_symmetric(m):
+    if (not ALPHA_FROM <= m.shape[0] < ALPHA_UNTIL or not np.all(np.isfinite(m[off]))
+            or not is_symmetric(m)):
         return neighbour_table(matrix, k)
     return alpha_neighbour_table(m, k)
 

@@ -14,11 +14,13 @@ chromosome type):
   local searches of ``aux.kicks`` kicks from the best tour (local double-bridge
   kicks of segments up to :data:`KICK_SPAN` cities or a tenth of the tour, each
   polished and kept unless the tour got longer; rejected ones are undone from a
-  log of flips) or polished
+  log of flips), without kicks the best tour bridged once and polished around the
+  bridge, or polished
   randomised nearest-neighbour tours; children of the greedy crossover are
   polished around the edges neither parent has, then searched the same way. The
-  local search makes sequential 2-opt and 3-opt moves (Or-3opt) and Or-opt moves
-  on neighbour lists, with don't-look bits (a queue of active cities);
+  local search makes sequential 2-opt and (from :data:`THREE_OPT_FROM` cities)
+  3-opt moves (Or-3opt) and Or-opt moves on neighbour lists, with don't-look bits
+  (a queue of active cities);
 * :data:`SEARCH_EXACT` - any costs (asymmetric ones): kicked restarts and a
   local search of segment exchanges and Or-opt moves on neighbour lists (moves
   that keep every direction of travel, so their cost change is exact) and short
@@ -31,7 +33,7 @@ GA dispatch registers; they branch on ``aux.search``.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -47,7 +49,11 @@ SEARCH_FAST = 1
 SEARCH_EXACT = 2
 KICK_SPAN = 10
 """Longest segment a double-bridge kick of the iterated local search moves on tours of
-up to 100 cities (a tenth of the tour on longer ones)."""
+up to 100 cities (a tenth of the tour on longer ones, up to :data:`KICK_SPAN_MAX`)."""
+KICK_SPAN_MAX = 100
+"""Longest segment a kick moves on any tour: at N = 3200 segments of a tenth (320 cities)
+made 40 generations 14% slower for the same tours (uniform points, 3 instances: mean
+length / sqrt(N) 0.7294 vs 0.7296; up to 1000 cities a tenth is at most this)."""
 
 
 class PermutationAux(NamedTuple):
@@ -85,7 +91,9 @@ def neighbour_table(matrix: np.ndarray, k: int | None = None) -> np.ndarray:
     Only the ``k`` nearest are sorted (``argpartition``), so building the table costs
     O(N^2) plus O(N k log k) rather than a full O(N^2 log N) sort.
     """
-    closeness = np.minimum(matrix, matrix.T).astype(float)
+    closeness = np.minimum(matrix, matrix.T)
+    if closeness.dtype != np.float64:
+        closeness = closeness.astype(float)
     np.fill_diagonal(closeness, np.inf)
     n = closeness.shape[0]
     k = n - 1 if k is None else max(1, min(int(k), n - 1))
@@ -141,7 +149,17 @@ def make_aux(table: np.ndarray, *, nearest_fallback: bool, grasp_share: float = 
         neighbours=np.ascontiguousarray(table[:, :k], dtype=np.int64))
 
 
-@njit(cache=True)
+# The moves and the helpers they call allocate nothing and are compiled with
+# ``_nrt=False``: numba otherwise increfs every array argument on entry and decrefs it on
+# exit, two atomic operations per array and call (the 2-/3-opt move takes ten arrays and
+# runs once per city popped from the queue); without them a move that finds nothing costs
+# half as much (random30: 290 -> 165 ns for the 3-opt move, 275 -> 135 ns for Or-opt).
+# (copy_run and reverse_run, in subtask_opt.ga.genes, are inlined.) ``_nrt`` is a private
+# option numba's type stubs do not list, hence the mapping.
+NO_NRT: dict[str, Any] = {"_nrt": False}
+
+
+@njit(cache=True, **NO_NRT)
 def tour_cost(genes, length, data, aux):
     """Cost of the closed tour genes[0] -> ... -> genes[length-1] -> genes[0]."""
     total = 0.0
@@ -165,7 +183,7 @@ def random_tour(genes, data, aux, rng, best, best_len):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _two_nearest_unused(current, data, used, row):
     """The nearest and second-nearest cities from ``current`` that are not ``used``
     (-1: none), among ``row`` (its neighbour list) or, when fewer than two of those are
@@ -260,10 +278,17 @@ def greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     n = len_a
     succ_a = np.empty(n, dtype=np.int64)
     succ_b = np.empty(n, dtype=np.int64)
+    return _greedy_child(genes_a, genes_b, n, data, aux, rng, child, succ_a, succ_b,
+                         np.zeros(n, dtype=np.bool_))
+
+
+@njit(cache=True)
+def _greedy_child(genes_a, genes_b, n, data, aux, rng, child, succ_a, succ_b, used):
+    """:func:`greedy_crossover` in the caller's scratch: ``succ_a``, ``succ_b`` (n,) get
+    the parents' successors (the caller may read them after), ``used`` (n,) is all False."""
     for i in range(n):
-        succ_a[genes_a[i]] = genes_a[(i + 1) % n]
-        succ_b[genes_b[i]] = genes_b[(i + 1) % n]
-    used = np.zeros(n, dtype=np.bool_)
+        succ_a[genes_a[i]] = genes_a[_wrap(i + 1, n)]
+        succ_b[genes_b[i]] = genes_b[_wrap(i + 1, n)]
     current = genes_a[0] if rng.random() < 0.5 else genes_b[0]
     child[0] = current
     used[current] = True
@@ -305,7 +330,7 @@ def no_improvement(genes, length, data, aux):
     return length
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _prefix_costs(tour, n, data, fwd, bwd):
     """fwd[i] = cost of tour[0] -> ... -> tour[i]; bwd the same path walked backwards."""
     fwd[0] = 0.0
@@ -315,19 +340,21 @@ def _prefix_costs(tour, n, data, fwd, bwd):
         bwd[i] = bwd[i - 1] + data[tour[i], tour[i - 1]]
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _two_opt_pass(tour, n, data, fwd, bwd):
     """One sweep of first-improvement 2-opt, exact for asymmetric costs.
 
     After a move the sweep goes on from the same position (prefix costs
-    refreshed) rather than starting over. True if anything moved.
+    refreshed) rather than starting over. True if anything moved. ``i = -1`` (``a`` the
+    last city) reverses runs that start at position 0: with asymmetric costs that is not
+    the reversal of the rest of the tour.
     """
     eps = 1e-12
     moved = False
-    for i in range(n - 2):
+    for i in range(-1, n - 2):
         j = i + 2
         while j < (n if i > 0 else n - 1):
-            a, b = tour[i], tour[i + 1]
+            a, b = tour[i if i >= 0 else n - 1], tour[i + 1]
             c, d = tour[j], tour[(j + 1) % n]
             # reverse tour[i+1 .. j]
             old = data[a, b] + data[c, d] + (fwd[j] - fwd[i + 1])
@@ -344,7 +371,7 @@ def _two_opt_pass(tour, n, data, fwd, bwd):
     return moved
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _or_opt_pass(tour, n, data, fwd, bwd, scratch, max_seg):
     """One sweep of first-improvement segment insertion (Or-opt generalised).
 
@@ -428,25 +455,36 @@ def exact_local_search(genes, length, data, aux):
 # cities, shorter than the edge it removes, are tried.
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _wrap(x, n):
+    """``x % n`` for ``-n <= x < 2n`` without an integer division (a division costs tens of
+    cycles, and the moves below take several positions modulo N per candidate)."""
+    if x < 0:
+        x += n
+    elif x >= n:
+        x -= n
+    return x
+
+
+@njit(cache=True, **NO_NRT)
 def _reverse(tour, pos, n, i, j):
     """Reverse the cyclic run tour[i..j] (or its complement, same cycle).
 
     Calling it again with the same ``i, j`` undoes it.
     """
-    length = (j - i) % n + 1
+    length = _wrap(j - i, n) + 1
     if 2 * length > n:  # reversing the complement gives the same cycle, cheaper
-        i, j = (j + 1) % n, (i - 1) % n
+        i, j = _wrap(j + 1, n), _wrap(i - 1, n)
         length = n - length
     for _ in range(length // 2):
         a, b = tour[i], tour[j]
         tour[i], tour[j] = b, a
         pos[b], pos[a] = i, j
-        i = (i + 1) % n
-        j = (j - 1) % n
+        i = _wrap(i + 1, n)
+        j = _wrap(j - 1, n)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _flip(genes, w, n, i, j):
     """:func:`_reverse` of positions i..j, written to the undo log ``w.log`` (when the
     log is full, ``w.state[3]`` is set and later flips are not logged)."""
@@ -460,7 +498,7 @@ def _flip(genes, w, n, i, j):
         w.state[3] = 1
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _undo(genes, w, n):
     """Undo the logged flips, newest first; False if the log overflowed (nothing undone)."""
     if w.state[3] != 0:
@@ -471,14 +509,14 @@ def _undo(genes, w, n):
     return True
 
 
-@njit(cache=True)
-def _shift_run(tour, pos, n, i, seg, x_pos):
+@njit(cache=True, **NO_NRT)
+def _shift_run(tour, pos, n, i, seg, x_pos, run):
     """Move the run tour[i..i+seg-1] to just after position x_pos (outside the run),
     same direction, shifting the cities on the shorter side between them (a flip
-    could reverse the direction of travel, which matters for asymmetric costs)."""
+    could reverse the direction of travel, which matters for asymmetric costs); ``run``
+    holds at least ``seg`` cities of scratch space."""
     after = (x_pos - (i + seg - 1)) % n  # cities between the run's end and x, x included
     before = n - seg - after  # cities between y and the run's start
-    run = np.empty(seg, dtype=tour.dtype)
     for t in range(seg):
         run[t] = tour[(i + t) % n]
     if after <= before:  # shift the `after` cities back by seg, then write the run
@@ -502,34 +540,34 @@ def _shift_run(tour, pos, n, i, seg, x_pos):
         pos[run[t]] = p
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _move_run(genes, w, n, i, seg, x_pos, reverse):
     """Move the run genes[i..i+seg-1] to just after position x_pos (outside the run),
     reversed or not: two or three flips over the shorter stretch between them."""
     s0 = genes[i]
-    s1 = genes[(i + seg - 1) % n]
-    before_s1 = genes[(i + seg - 2) % n]  # the run's second city from s1 (if seg > 1)
+    s1 = genes[_wrap(i + seg - 1, n)]
+    before_s1 = genes[_wrap(i + seg - 2, n)]  # the run's second city from s1 (if seg > 1)
     after = (x_pos - (i + seg - 1)) % n  # cities between the run's end and x, x included
     before = n - seg - after  # cities between y and the run's start
     if after <= before:  # p [R][M] y -> p [M][R] y, M = q .. x
         x = genes[x_pos]
-        before_x = genes[(x_pos - 1) % n]
-        q = genes[(i + seg) % n]
-        _reverse_path(genes, w, n, s0, genes[(i + 1) % n], x)  # [x..q][s1..s0]
+        before_x = genes[_wrap(x_pos - 1, n)]
+        q = genes[_wrap(i + seg, n)]
+        _reverse_path(genes, w, n, s0, genes[_wrap(i + 1, n)], x)  # [x..q][s1..s0]
         if after > 1:
             _reverse_path(genes, w, n, x, before_x, q)
     else:  # x [B][R] q -> x [R][B] q, B = y .. p
-        y = genes[(x_pos + 1) % n]
-        p = genes[(i - 1) % n]
-        before_p = genes[(i - 2) % n]
-        _reverse_path(genes, w, n, y, genes[(x_pos + 2) % n], s1)  # [s1..s0][p..y]
+        y = genes[_wrap(x_pos + 1, n)]
+        p = genes[_wrap(i - 1, n)]
+        before_p = genes[_wrap(i - 2, n)]
+        _reverse_path(genes, w, n, y, genes[_wrap(x_pos + 2, n)], s1)  # [s1..s0][p..y]
         if before > 1:
             _reverse_path(genes, w, n, p, before_p, y)
     if not reverse and seg > 1:
         _reverse_path(genes, w, n, s1, before_s1, s0)
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _push(queue, queued, state, n, city):
     """Append ``city`` to the circular queue unless it is in it (state = [head, tail])."""
     if not queued[city]:
@@ -538,18 +576,18 @@ def _push(queue, queued, state, n, city):
         state[1] += 1
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _reverse_path(genes, w, n, u, u2, v):
     """Flip the tour path from ``u`` (whose next city on the path is ``u2``) to ``v``,
     whichever way round it lies in the array."""
-    if genes[(w.pos[u] + 1) % n] == u2:
+    if genes[_wrap(w.pos[u] + 1, n)] == u2:
         _flip(genes, w, n, w.pos[u], w.pos[v])
     else:
         _flip(genes, w, n, w.pos[v], w.pos[u])
 
 
-@njit(cache=True)
-def _three_opt_move(t1, genes, w, n, data, nb):
+@njit(cache=True, **NO_NRT)
+def _three_opt_move(t1, genes, w, n, data, nb, deep):
     """Apply the first improving sequential 2-opt or 3-opt move that starts by
     removing an edge at ``t1`` (Or-3opt, "or2opt" and "or3opt" of LK: each new edge
     joins a chain end to one of its nearest cities and the partial gain stays
@@ -558,7 +596,8 @@ def _three_opt_move(t1, genes, w, n, data, nb):
     With t2 next to t1 (direction ``s``), t3 near t2 and t4 next to t3:
     t4 behind t3 is a 2-opt move, and a third edge (t5 near t4, t6 next to t5)
     makes the 3-opt moves; t4 ahead of t3 splits off the cycle t2..t3, which a
-    third edge inside it rejoins (a segment move, reversed or not).
+    third edge inside it rejoins (a segment move, reversed or not). Without ``deep``
+    only the 2-opt moves are tried (see :data:`THREE_OPT_FROM`).
     """
     eps = 1e-10
     k_nb = nb.shape[1]
@@ -566,7 +605,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
     touched = w.touched
     for side in range(2):
         s = 1 if side == 0 else -1
-        t2 = genes[(pos[t1] + s) % n]
+        t2 = genes[_wrap(pos[t1] + s, n)]
         g0 = data[t1, t2]
         for a in range(k_nb):
             t3 = nb[t2, a]
@@ -575,19 +614,21 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                 break
             if t3 == t1:
                 continue
-            l23 = ((pos[t3] - pos[t2]) * s) % n  # steps from t2 to t3 along s
+            l23 = _wrap((pos[t3] - pos[t2]) * s, n)  # steps from t2 to t3 along s
             for which in range(2):
                 if which == 0:  # t4 behind t3: a 2-opt move, or its 3-opt extensions
-                    t4 = genes[(pos[t3] - s) % n]
+                    t4 = genes[_wrap(pos[t3] - s, n)]
                     if t4 == t2:
                         continue
                     big = g1 + data[t3, t4]
                     gain = big - data[t4, t1]
                     if gain > eps:
-                        _reverse_path(genes, w, n, t2, genes[(pos[t2] + s) % n], t4)
+                        _reverse_path(genes, w, n, t2, genes[_wrap(pos[t2] + s, n)], t4)
                         touched[0], touched[1], touched[2], touched[3] = t1, t2, t3, t4
                         touched[4], touched[5] = t1, t2
                         return gain
+                    if not deep:
+                        continue
                     for c in range(k_nb):
                         t5 = nb[t4, c]
                         g2 = big - data[t4, t5]
@@ -597,23 +638,23 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                             continue
                         # after the 2-opt flip (t1 t4 .. t2 t3 ..), t6 is t5's
                         # predecessor there: its successor inside t2..t4, else its predecessor
-                        inside = ((pos[t5] - pos[t2]) * s) % n < l23
-                        t6 = genes[(pos[t5] + s) % n] if inside else genes[(pos[t5] - s) % n]
+                        inside = _wrap((pos[t5] - pos[t2]) * s, n) < l23
+                        t6 = genes[_wrap(pos[t5] + s, n) if inside else _wrap(pos[t5] - s, n)]
                         if t6 == t4 or t6 == t1:
                             continue
                         gain = g2 + data[t5, t6] - data[t6, t1]
                         if gain > eps:
-                            _reverse_path(genes, w, n, t2, genes[(pos[t2] + s) % n], t4)
+                            _reverse_path(genes, w, n, t2, genes[_wrap(pos[t2] + s, n)], t4)
                             # now t1 t4 ... t2 t3: the second flip reverses t4 .. t6
-                            if genes[(pos[t1] + 1) % n] == t4:
+                            if genes[_wrap(pos[t1] + 1, n)] == t4:
                                 _flip(genes, w, n, pos[t4], pos[t6])
                             else:
                                 _flip(genes, w, n, pos[t6], pos[t4])
                             touched[0], touched[1], touched[2] = t1, t2, t3
                             touched[3], touched[4], touched[5] = t4, t5, t6
                             return gain
-                else:  # t4 ahead of t3: the cycle t2..t3 must be rejoined inside
-                    t4 = genes[(pos[t3] + s) % n]
+                elif deep:  # t4 ahead of t3: the cycle t2..t3 must be rejoined inside
+                    t4 = genes[_wrap(pos[t3] + s, n)]
                     if t4 == t1:
                         continue
                     big = g1 + data[t3, t4]
@@ -622,25 +663,25 @@ def _three_opt_move(t1, genes, w, n, data, nb):
                         g2 = big - data[t4, t5]
                         if g2 <= eps:
                             break
-                        l25 = ((pos[t5] - pos[t2]) * s) % n
+                        l25 = _wrap((pos[t5] - pos[t2]) * s, n)
                         if l25 > l23:  # t5 outside t2..t3
                             continue
                         for nxt in range(2):
                             if nxt == 0:  # t6 after t5: t1 [t6..t3] [t2..t5] t4
                                 if t5 == t3:
                                     continue
-                                t6 = genes[(pos[t5] + s) % n]
+                                t6 = genes[_wrap(pos[t5] + s, n)]
                             else:  # t6 before t5: t1 rev[t2..t6] rev[t5..t3] t4
                                 if t5 == t2:
                                     continue
-                                t6 = genes[(pos[t5] - s) % n]
+                                t6 = genes[_wrap(pos[t5] - s, n)]
                             gain = g2 + data[t5, t6] - data[t6, t1]
                             if gain > eps:
                                 # each path's second city, before anything moves
-                                after_t2 = genes[(pos[t2] + s) % n]
-                                before_t3 = genes[(pos[t3] - s) % n]
-                                before_t5 = genes[(pos[t5] - s) % n]
-                                after_t5 = genes[(pos[t5] + s) % n]
+                                after_t2 = genes[_wrap(pos[t2] + s, n)]
+                                before_t3 = genes[_wrap(pos[t3] - s, n)]
+                                before_t5 = genes[_wrap(pos[t5] - s, n)]
+                                after_t5 = genes[_wrap(pos[t5] + s, n)]
                                 if nxt == 0:
                                     _reverse_path(genes, w, n, t2, after_t2, t3)
                                     if t3 != t6:
@@ -658,7 +699,7 @@ def _three_opt_move(t1, genes, w, n, data, nb):
     return 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     """Apply the first improving move of a run of 1..max_seg cities starting or
     ending at ``a`` next to one of the nearest cities of its end points (either
@@ -669,30 +710,31 @@ def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
     pos = w.pos
     touched = w.touched
     for seg in range(1, max_seg + 1):
-        for end in range(2):
-            i = pos[a] if end == 0 else (pos[a] - seg + 1) % n
+        ends = 2 if seg > 1 else 1  # a single city starts and ends its run: one try
+        for end in range(ends):
+            i = pos[a] if end == 0 else _wrap(pos[a] - seg + 1, n)
             s0 = genes[i]
-            s1 = genes[(i + seg - 1) % n]
-            p = genes[(i - 1) % n]
-            q = genes[(i + seg) % n]
+            s1 = genes[_wrap(i + seg - 1, n)]
+            p = genes[_wrap(i - 1, n)]
+            q = genes[_wrap(i + seg, n)]
             removed = data[p, s0] + data[s1, q] - data[p, q]
             if removed <= eps:
                 continue
-            for which in range(2):
+            for which in range(ends):
                 s = s0 if which == 0 else s1
                 for t in range(k_nb):
                     c = nb[s, t]
                     if min(data[s, c], data[c, s]) >= removed - eps:
                         break
                     ic = pos[c]
-                    if (ic - i) % n < seg:  # c is inside the run
+                    if _wrap(ic - i, n) < seg:  # c is inside the run
                         continue
                     for after in range(2):  # the edge after c, then the edge before it
-                        x_pos = ic if after == 1 else (ic - 1) % n
-                        if (x_pos - i) % n < seg or ((x_pos + 1) - i) % n < seg:
+                        x_pos = ic if after == 1 else _wrap(ic - 1, n)
+                        if _wrap(x_pos - i, n) < seg or _wrap((x_pos + 1) - i, n) < seg:
                             continue
                         x = genes[x_pos]
-                        y = genes[(x_pos + 1) % n]
+                        y = genes[_wrap(x_pos + 1, n)]
                         fwd = data[x, s0] + data[s1, y]
                         rev = data[x, s1] + data[s0, y] if reversible else np.inf
                         gain = removed + data[x, y] - min(fwd, rev)
@@ -700,27 +742,27 @@ def _or_opt_move(a, genes, w, n, data, nb, max_seg, reversible):
                             if reversible:
                                 _move_run(genes, w, n, i, seg, x_pos, rev < fwd)
                             else:
-                                _shift_run(genes, pos, n, i, seg, x_pos)
+                                _shift_run(genes, pos, n, i, seg, x_pos, w.scratch)
                             touched[0], touched[1], touched[2] = p, q, s0
                             touched[3], touched[4], touched[5] = s1, x, y
                             return gain
     return 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _swap_blocks(genes, pos, n, start, len1, len2, scratch):
     """Rewrite the cyclic run of ``len1`` then ``len2`` cities from position ``start`` as
     the second block then the first, each in its own direction."""
     for t in range(len1 + len2):
-        scratch[t] = genes[(start + t) % n]
+        scratch[t] = genes[_wrap(start + t, n)]
     for t in range(len1 + len2):
         c = scratch[(len1 + t) % (len1 + len2)]
-        p = (start + t) % n
+        p = _wrap(start + t, n)
         genes[p] = c
         pos[c] = p
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _segment_exchange_move(t1, genes, w, n, data, nb):
     """Apply the first improving segment exchange that removes the edge t1 -> t2 (the
     pure 3-opt move that keeps every direction of travel, so it is exact for
@@ -731,7 +773,7 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
     eps = 1e-10
     k_nb = nb.shape[1]
     pos = w.pos
-    t2 = genes[(pos[t1] + 1) % n]
+    t2 = genes[_wrap(pos[t1] + 1, n)]
     d12 = data[t1, t2]
     for a in range(k_nb):
         t5 = nb[t2, a]
@@ -740,17 +782,17 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
         g1 = d12 - data[t5, t2]
         if g1 <= eps or t5 == t1:
             continue
-        l25 = (pos[t5] - pos[t2]) % n  # t2 .. t5 along the tour, before t1
-        t6 = genes[(pos[t5] + 1) % n]
+        l25 = _wrap(pos[t5] - pos[t2], n)  # t2 .. t5 along the tour, before t1
+        t6 = genes[_wrap(pos[t5] + 1, n)]
         big = g1 + data[t5, t6]
         for b in range(k_nb):
             t3 = nb[t6, b]
             if min(data[t3, t6], data[t6, t3]) >= big - eps:
                 break
-            l23 = (pos[t3] - pos[t2]) % n
+            l23 = _wrap(pos[t3] - pos[t2], n)
             if l23 >= l25:  # t3 must end the first block, before t5's block
                 continue
-            t4 = genes[(pos[t3] + 1) % n]
+            t4 = genes[_wrap(pos[t3] + 1, n)]
             gain = big - data[t3, t6] + data[t3, t4] - data[t1, t4]
             if gain > eps:
                 # blocks A = t2..t3, B = t4..t5, C = t6..t1; any two neighbouring ones
@@ -771,13 +813,21 @@ def _segment_exchange_move(t1, genes, w, n, data, nb):
     return 0.0
 
 
+THREE_OPT_FROM = 100
+"""Fewest cities for which the symmetric search tries 3-opt moves (:func:`_three_opt_move`);
+below, 2-opt and Or-opt moves as in v0.1. On random30 (trapezoid, 10 sets x 5 seeds,
+stall 15) the 3-opt moves cost a quarter of the search per generation (97 against 72 us)
+for the same 50 tour times; they pay on large tours (with the kicks of
+:data:`KICKS_FROM`, where the iterated search lives on them)."""
+
+
 ASYMMETRIC_FLIP = 150
 """Longest path the asymmetric 2-opt move reverses (its cost change is a sum along it, so
 the bound keeps a move's price O(1) in N; in benchmarks/growth.py --asymmetric, 50 gave
 1-2% longer tours at N = 200 to 1600 and no bound twice the time at N = 1600)."""
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _asymmetric_two_opt_move(t1, genes, w, n, data, nb):
     """Apply the first improving 2-opt move that removes an edge at ``t1`` and reverses
     a path of at most :data:`ASYMMETRIC_FLIP` cities (and at most half the tour, so the
@@ -791,28 +841,28 @@ def _asymmetric_two_opt_move(t1, genes, w, n, data, nb):
     longest = min(ASYMMETRIC_FLIP, n // 2)
     for side in range(2):
         s = 1 if side == 0 else -1
-        t2 = genes[(pos[t1] + s) % n]
+        t2 = genes[_wrap(pos[t1] + s, n)]
         d12 = data[t1, t2] if s == 1 else data[t2, t1]
         for a in range(k_nb):
             t3 = nb[t2, a]
             if min(data[t2, t3], data[t3, t2]) >= d12 - eps:
                 break
-            steps = ((pos[t3] - pos[t2]) * s) % n  # the path t2 .. t4 has `steps` cities
+            steps = _wrap((pos[t3] - pos[t2]) * s, n)  # the path t2 .. t4 has `steps` cities
             if t3 == t1 or steps < 2 or steps > longest:
                 continue
-            t4 = genes[(pos[t3] - s) % n]
+            t4 = genes[_wrap(pos[t3] - s, n)]
             first = pos[t2] if s == 1 else pos[t4]  # the path in array order
             turn = 0.0  # its cost backwards minus forwards
             for k in range(steps - 1):
-                u = genes[(first + k) % n]
-                v = genes[(first + k + 1) % n]
+                u = genes[_wrap(first + k, n)]
+                v = genes[_wrap(first + k + 1, n)]
                 turn += data[v, u] - data[u, v]
             if s == 1:  # t1 t2 .. t4 t3 -> t1 t4 .. t2 t3
                 gain = d12 + data[t4, t3] - data[t1, t4] - data[t2, t3] - turn
             else:  # t3 t4 .. t2 t1 -> t3 t2 .. t4 t1
                 gain = d12 + data[t3, t4] - data[t3, t2] - data[t4, t1] - turn
             if gain > eps:
-                _flip(genes, w, n, first, (first + steps - 1) % n)
+                _flip(genes, w, n, first, _wrap(first + steps - 1, n))
                 touched = w.touched
                 touched[0], touched[1], touched[2] = t1, t2, t3
                 touched[3], touched[4], touched[5] = t4, t1, t2
@@ -830,25 +880,47 @@ class _Work(NamedTuple):
     touched: np.ndarray  # the cities the last move or kick changed
     log: np.ndarray  # (L, 2) position pairs of the flips since the log was cleared
     scratch: np.ndarray  # n cities, for block swaps
+    spare: np.ndarray  # n cities, for the caller (the active cities of a polish)
+
+
+LOG_FLIPS = 1024
+"""Flips the undo log of an iterated local search holds (:func:`_flip`)."""
 
 
 @njit(cache=True)
 def _work(genes, n):
-    pos = np.empty(n, dtype=np.int64)
+    """The scratch of a local search over ``genes[:n]``: :func:`_scratch` with ``pos``
+    filled."""
+    w = _scratch(n)
     for i in range(n):
-        pos[genes[i]] = i
-    return _Work(pos, np.empty(n, dtype=np.int64), np.zeros(n, dtype=np.bool_),
-                 np.zeros(4, dtype=np.int64), np.empty(8, dtype=np.int64),
-                 np.empty((1024, 2), dtype=np.int64), np.empty(n, dtype=np.int64))
+        w.pos[genes[i]] = i
+    return w
 
 
 @njit(cache=True)
+def _scratch(n):
+    """The scratch of a local search over n cities (``pos`` not filled, the queue empty,
+    ``queued`` all False), its integer rows views of one allocation: allocating each
+    apart cost a 30-city generation about a tenth of its time (two allocations instead of
+    eight per polish)."""
+    buf = np.empty(4 * n + 12 + 2 * LOG_FLIPS, dtype=np.int64)
+    pos = buf[:n]
+    state = buf[4 * n:4 * n + 4]
+    for k in range(4):
+        state[k] = 0
+    log = buf[4 * n + 12:].reshape((LOG_FLIPS, 2))
+    return _Work(pos, buf[n:2 * n], np.zeros(n, dtype=np.bool_), state,
+                 buf[4 * n + 4:4 * n + 12], log, buf[2 * n:3 * n], buf[3 * n:4 * n])
+
+
+@njit(cache=True, **NO_NRT)
 def _polish(genes, n, data, aux, w, symmetric):
     """Improve from the queued cities until no queued city has an improving move;
     return the total gain. Symmetric costs: LK-style moves, then Or-opt; else
     segment exchanges, short 2-opt flips priced exactly, and Or-opt without reversal."""
     nb = aux.neighbours
     max_seg = min(aux.max_segment, n - 3)
+    deep = n >= THREE_OPT_FROM
     gain_total = 0.0
     # every move lowers the cost; the budget only guarantees termination if a
     # caller breaks the contract (e.g. calls the symmetric search on asymmetric costs)
@@ -861,7 +933,7 @@ def _polish(genes, n, data, aux, w, symmetric):
         moved = 0
         gain = 0.0
         if symmetric:
-            gain = _three_opt_move(a, genes, w, n, data, nb)
+            gain = _three_opt_move(a, genes, w, n, data, nb, deep)
         else:
             gain = _segment_exchange_move(a, genes, w, n, data, nb)
             if gain <= 0.0:
@@ -893,10 +965,17 @@ def local_search_around(genes, length, data, aux, active, n_active):
     A city whose moves all fail goes idle until a move changes one of its tour
     neighbours, so polishing a tour that changed in a few places costs little.
     """
-    n = length
-    if n < 8:
+    if length < 8:
         return exact_local_search(genes, length, data, aux)
-    w = _work(genes, n)
+    return _search_around(genes, length, data, aux, active, n_active, _work(genes, length))
+
+
+@njit(cache=True)
+def _search_around(genes, n, data, aux, active, n_active, w):
+    """:func:`local_search_around` in the scratch ``w`` (:func:`_work` of ``genes``, its
+    ``queued`` all False; ``active`` may be ``w.spare``)."""
+    if n < 8:
+        return exact_local_search(genes, n, data, aux)
     for i in range(n_active):
         _push(w.queue, w.queued, w.state, n, active[i])
     _polish(genes, n, data, aux, w, True)
@@ -944,7 +1023,7 @@ def asymmetric_local_search(genes, length, data, aux):
     return length
 
 
-@njit(cache=True)
+@njit(cache=True, **NO_NRT)
 def _bridge(genes, w, n, data, q1, lb, lc, ld):
     """The double bridge after position ``q1``: the next three segments B, C, D of
     ``lb``, ``lc``, ``ld`` cities (together fewer than n) put back as D C B (four edges
@@ -953,17 +1032,17 @@ def _bridge(genes, w, n, data, q1, lb, lc, ld):
     q2 = q1 + lb
     q3 = q2 + lc
     q4 = q3 + ld
-    a, b = genes[q1 % n], genes[(q1 + 1) % n]
-    c, d = genes[q2 % n], genes[(q2 + 1) % n]
-    e, f = genes[q3 % n], genes[(q3 + 1) % n]
-    g, h = genes[q4 % n], genes[(q4 + 1) % n]
+    a, b = genes[q1 % n], genes[_wrap(q1 + 1, n)]
+    c, d = genes[q2 % n], genes[_wrap(q2 + 1, n)]
+    e, f = genes[q3 % n], genes[_wrap(q3 + 1, n)]
+    g, h = genes[q4 % n], genes[_wrap(q4 + 1, n)]
     delta = (data[a, f] + data[g, d] + data[e, b] + data[c, h]
              - data[a, b] - data[c, d] - data[e, f] - data[g, h])
-    before_c = genes[(q2 - 1) % n]
-    before_e = genes[(q3 - 1) % n]
-    before_g = genes[(q4 - 1) % n]
+    before_c = genes[_wrap(q2 - 1, n)]
+    before_e = genes[_wrap(q3 - 1, n)]
+    before_g = genes[_wrap(q4 - 1, n)]
     # B C D -> [g..f][e..d][c..b] -> flip each piece back
-    _reverse_path(genes, w, n, b, genes[(q1 + 2) % n], g)
+    _reverse_path(genes, w, n, b, genes[_wrap(q1 + 2, n)], g)
     if ld > 1:
         _reverse_path(genes, w, n, g, before_g, f)
     if lc > 1:
@@ -996,7 +1075,7 @@ def iterated_local_search(genes, length, data, aux, rng, kicks):
     w = _work(genes, n)
     # segments of a tenth of a long tour: on pr1002 they reach a 0.2% tour in half the
     # kicks and time of 10-city ones
-    span = max(KICK_SPAN, n // 10)
+    span = max(KICK_SPAN, min(n // 10, KICK_SPAN_MAX))
     saved = genes[:n].copy()  # a tour as short as the current one, for a log overflow
     cost = tour_cost(genes, n, data, aux)
     for _ in range(kicks):
@@ -1020,14 +1099,67 @@ def iterated_local_search(genes, length, data, aux, rng, kicks):
 @njit(cache=True)
 def kicked_best_polished(genes, data, aux, rng, best, best_len):
     """A restart individual for symmetric costs: a polished randomised nearest-neighbour
-    tour (before any best, and a ``grasp_share`` of the time), else an iterated local
-    search of ``aux.kicks`` close kicks from the best tour."""
+    tour (before any best, and a ``grasp_share`` of the time), else, with kicks
+    (``aux.kicks`` > 0, from :data:`KICKS_FROM` cities by default), an iterated local
+    search of that many close kicks from the best tour, and without them the best tour
+    bridged once and polished around the bridge (:func:`bridged_best`)."""
     n = data.shape[0]
     if best_len == 0 or rng.random() < aux.grasp_share:
         nearest_neighbour_tour(genes, data, aux, rng)
         return local_search(genes, n, data, aux)
+    if aux.kicks == 0:
+        return bridged_best(genes, data, aux, rng, best)
     copy_run(genes, 0, best, 0, n)
-    return iterated_local_search(genes, n, data, aux, rng, max(1, aux.kicks))
+    return iterated_local_search(genes, n, data, aux, rng, aux.kicks)
+
+
+@njit(cache=True)
+def bridged_best(genes, data, aux, rng, best):
+    """The best tour after a double bridge of three random segments anywhere in it (as
+    :func:`kicked_best` makes), polished around the cities whose neighbours changed: a
+    restart individual of a new basin near the best, neither undone nor compared.
+
+    Restarts without kicks (below :data:`KICKS_FROM` cities) are these, as in v0.1: an
+    iterated search of one close kick, undone unless no longer, cost twice as much and
+    mostly gave the best tour back (random30: the GA then restarted in every
+    generation), and on the held-out sets of ``benchmarks/heldout.py`` both reach the
+    certified optimum in every run."""
+    n = data.shape[0]
+    if n < 8:
+        random_tour(genes, data, aux, rng, best, n)
+        return local_search(genes, n, data, aux)
+    p1 = rng.integers(1, n - 2)
+    p2 = rng.integers(p1 + 1, n - 1)
+    p3 = rng.integers(p2 + 1, n)
+    k = 0
+    for i in range(0, p1):
+        genes[k] = best[i]
+        k += 1
+    for i in range(p2, p3):
+        genes[k] = best[i]
+        k += 1
+    for i in range(p1, p2):
+        genes[k] = best[i]
+        k += 1
+    for i in range(p3, n):
+        genes[k] = best[i]
+        k += 1
+    w = _scratch(n)
+    pos = w.scratch  # in the best tour
+    for i in range(n):
+        pos[best[i]] = i
+    active = w.spare
+    m = 0
+    for i in range(n):  # the cities whose successor changed, and those successors
+        a = genes[i]
+        b = genes[_wrap(i + 1, n)]
+        if best[_wrap(pos[a] + 1, n)] != b and best[_wrap(pos[b] + 1, n)] != a and m + 2 <= n:
+            active[m] = a
+            active[m + 1] = b
+            m += 2
+    for i in range(n):
+        w.pos[genes[i]] = i
+    return _search_around(genes, n, data, aux, active, m, w)
 
 
 @njit(cache=True)
@@ -1036,24 +1168,27 @@ def greedy_crossover_polished(genes_a, len_a, genes_b, len_b, data, aux, rng, ch
     then an iterated local search of ``aux.kicks`` kicks. A child longer than the
     better parent is replaced by that parent (before the iterated search), so
     children never fall behind their parents."""
-    n = greedy_crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child)
-    succ_a = np.empty(n, dtype=np.int64)
-    succ_b = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        succ_a[genes_a[i]] = genes_a[(i + 1) % n]
-        succ_b[genes_b[i]] = genes_b[(i + 1) % n]
-    active = np.empty(n, dtype=np.int64)
+    n = len_a
+    # one allocation for the crossover's and the local search's scratch (see _scratch)
+    w = _scratch(n)
+    succ_a = w.scratch
+    succ_b = w.queue
+    active = w.spare
+    _greedy_child(genes_a, genes_b, n, data, aux, rng, child, succ_a, succ_b, w.queued)
+    for i in range(n):  # the scratch made ready for the local search of the child
+        w.pos[child[i]] = i
+        w.queued[i] = False
     m = 0
     for i in range(n):
         u = child[i]
-        v = child[(i + 1) % n]
+        v = child[_wrap(i + 1, n)]
         parental = (succ_a[u] == v or succ_a[v] == u or succ_b[u] == v or succ_b[v] == u)
         if not parental and m + 2 <= n:
             active[m] = u
             active[m + 1] = v
             m += 2
     if m > 0:
-        local_search_around(child, n, data, aux, active, m)
+        _search_around(child, n, data, aux, active, m, w)
     cost_a = tour_cost(genes_a, n, data, aux)
     cost_b = tour_cost(genes_b, n, data, aux)
     better = genes_a if cost_a <= cost_b else genes_b

@@ -277,9 +277,90 @@ def test_jerk_limited_line_picks_a_near_best_averaging_width() -> None:
                                          q[j, c].copy(), lim)[7]
                 tk, sk = lk.profile_knots(sg, x, w)
                 u = (b - a) / np.linalg.norm(b - a)
-                best = min(lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, qs, der, x, w, tk,
-                                        sk, tau, lim, True) * (t1 + tau)
+                best = min(lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, np.sqrt(x), w,
+                                        tk, sk, tau, lim) * (t1 + tau)
                            for tau in t1 * np.geomspace(1e-3, 2.0, 120))
                 ratios.append(chosen / best)
     assert len(ratios) >= 8
     assert max(ratios) < 1.05
+
+
+def test_point_derivatives_without_trigonometry_equal_those_of_the_ik_angles() -> None:
+    # oracle: path_derivatives at the joint angles of the IK (sines and cosines of them)
+    from subtask_opt.arm.timing import _line_kernels as lk
+
+    arm = _arm("planar_2r")
+    s = random_subtasks(arm, 12, seed=6)
+    q = arm.ik(s.points)
+    u = np.array([0.6, -0.8])
+    checked = 0
+    for i, p in enumerate(s.points):
+        for branch in range(2):
+            if np.isnan(q[i, branch, 0]):
+                continue
+            want = np.empty(lk.N_DER)
+            got = np.empty(lk.N_DER)
+            assert lk.path_derivatives(arm.kinematics, q[i, branch, 0], q[i, branch, 1], u[0],
+                                       u[1], want)
+            assert lk.point_derivatives(arm.kinematics, p[0], p[1], branch, u[0], u[1], got)
+            np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9 * np.abs(want).max())
+            checked += 1
+    assert checked >= 12
+    outside = arm.base_xy + np.array([2.0 * arm.r_max, 0.0])
+    assert not lk.point_derivatives(arm.kinematics, outside[0], outside[1], 0, 1.0, 0.0,
+                                    np.empty(lk.N_DER))
+
+
+def test_the_breakpoint_check_is_never_below_a_dense_sampling() -> None:
+    # oracle: the smoothed profile sampled at 12 instants per piece, path derivatives by IK;
+    # the check (every breakpoint, the jerk on both sides) may be above it, and below it by
+    # less than the margin the time stretch gets (the limits between breakpoints)
+    from subtask_opt.arm.timing import _line_kernels as lk
+    from subtask_opt.arm.timing.models import line_limits
+
+    arm = _arm("planar_2r")
+    lim = line_limits(arm)
+    inv = lk._inverse_limits(lim)
+    s = random_subtasks(arm, 5, seed=3)
+    q = arm.ik(s.points)
+    checked = 0
+    for i in range(5):
+        for j in range(i + 1, 5):
+            c = 0 if not np.isnan(q[[i, j], 0, 0]).any() else 1
+            if np.isnan(q[[i, j], c, 0]).any():
+                continue
+            a, b = s.points[i].copy(), s.points[j].copy()
+            st, sg, qs, der = lk.line_geometry(arm.kinematics, a, b, c, q[i, c].copy(),
+                                               q[j, c].copy(), lim.grid)
+            if st != lk.LINE_OK:
+                continue
+            ok, x, w, t1 = lk.topp_profile(der, sg, lim.vel, lim.acc, lim.kv, lim.ka, lim.kw,
+                                           lim.kw_dot)
+            tk, sk = lk.profile_knots(sg, x, w)
+            v = np.sqrt(x)
+            u = (b - a) / np.linalg.norm(b - a)
+            for tau in t1 * np.array([0.003, 0.05, 0.3, 1.0]):
+                check = lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, v, w, tk, sk, tau, lim)
+                dense = _dense_slowdown(lk, arm.kinematics, a, u, c, sg, qs, v, w, tk, sk, tau,
+                                        inv, lim.has_jerk)
+                assert check * (1 + lim.margin) >= dense, (i, j, tau / t1)
+                assert check <= dense * (1 + 1e-3)
+                checked += 1
+    assert checked >= 12
+
+
+def _dense_slowdown(lk, kin, p0, u, branch, sg, qs, v, w, tk, sk, tau, inv, has_jerk):
+    n = 12 * 2 * tk.shape[0]
+    end = tk[-1] + tau
+    der = np.empty(lk.N_DER)
+    tmp = np.empty(2)
+    rv = ra = rj = 0.0
+    ia = ib = g = 0
+    for k in range(n):
+        t = (k + 0.5) * end / n
+        f, f1, f2, f3, ia, ib = lk._smoothed(t, tau, ia, ib, sg, v, w, tk, sk)
+        while g < sg.shape[0] - 2 and f >= sg[g + 1]:
+            g += 1
+        lk._exact_derivatives(kin, p0, u[0], u[1], branch, sg, qs, f, g, der, tmp)
+        rv, ra, rj = lk._ratios(tuple(der), f1, f2, f3, f3, inv, has_jerk, rv, ra, rj)
+    return max(rv, math.sqrt(ra), rj ** (1.0 / 3.0))

@@ -117,6 +117,19 @@ def test_choosing_configurations_makes_several_shorter_runs(arm):
     assert SolverParams().default_stop(200, configured=True) == SolverParams().default_stop(200)
 
 
+def test_the_default_stop_caps_the_generations_from_1000_nodes():
+    from subtask_opt.tour.solve import generation_cap
+
+    def cap(n: int) -> int:
+        (limit,) = [c for c in SolverParams().default_stop(n) if isinstance(c, MaxGenerations)]
+        return limit.generations
+
+    assert [cap(n) for n in (30, 999, 1000, 1280, 1600, 3200, 20_000)] == [
+        50_000, 50_000, 64, 50, 40, 20, 20]
+    assert generation_cap(3200) == 20 and generation_cap(2400) == 26
+    assert SolverParams.paper().default_stop(3200)[1] == MaxGenerations(50_000)
+
+
 def test_stopping_criteria_are_honoured():
     m = _euclidean(5, 25)
     problem = MatrixProblem(m)

@@ -83,10 +83,27 @@ def test_run_in_chunks_stops_exactly_at_max_generations():
     seen = []
     run_in_chunks(run_chunk, progress, [MaxGenerations(300)], on_chunk=seen.append)
     assert state["gen"] == 300
-    # chunks start at one generation and double (the fake kernel is far under the 0.05 s a
-    # chunk may take), never past the limit: 1 + 2 + ... + 128 = 255, then the last 45
-    assert state["chunks"] == [1, 2, 4, 8, 16, 32, 64, 128, 45]
-    assert [p.generation for p in seen] == [1, 3, 7, 15, 31, 63, 127, 255, 300]
+    # chunks start at one generation and grow 64-fold at most (the fake kernel is far under
+    # the 0.05 s a chunk may take), never past the limit: 1, 64, then the last 235
+    assert state["chunks"] == [1, 64, 235]
+    assert [p.generation for p in seen] == [1, 65, 300]
+
+
+def test_run_in_chunks_grows_towards_a_chunk_of_chunk_s_at_the_measured_rate(monkeypatch):
+    from subtask_opt.ga import loop
+
+    clock = [0.0]
+    monkeypatch.setattr(loop.time, "perf_counter", lambda: clock[0])
+    state, fake, progress = _fake_kernel()
+
+    def run_chunk(n: int) -> int:  # a generation takes 1/64 s (exact in binary)
+        clock[0] += n / 64
+        return fake(n)
+
+    run_in_chunks(run_chunk, progress, [MaxGenerations(40)])
+    # 1 generation in 0.016 s: 3x (towards 0.05 s); 3 in 0.047 s: at least 2x; 6 in 0.094 s
+    # are over it: no more growth
+    assert state["chunks"] == [1, 3, 6, 6, 6, 6, 6, 6]
 
 
 def test_run_in_chunks_ends_when_the_kernel_stops_itself():

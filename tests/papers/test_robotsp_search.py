@@ -35,3 +35,6 @@ def test_short_search_is_recorded_and_valid() -> None:
     assert ours["legs_in_collision"] == 0
     assert (report["stall"], report["kicks"]) == (1, 0)
     assert "stall 1, kicks 0" in table(report).splitlines()[0]
+    # numba's compilation and loading apart from every phase, in the table too
+    assert set(ours["cpu_s"]) == {"ik", "collision", "matrix", "compile", "search"}
+    assert "compile s" in table(report).splitlines()[1]

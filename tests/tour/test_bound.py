@@ -280,6 +280,14 @@ def test_candidate_table_picks_alpha_only_for_finite_symmetric_and_large():
     assert np.array_equal(candidate_table(holed, 6), neighbour_table(holed, 6))
 
 
+def test_candidate_table_takes_the_nearest_again_from_alpha_until():
+    from subtask_opt.tour.bound import ALPHA_UNTIL
+
+    pts = np.random.default_rng(8).random((ALPHA_UNTIL, 2)) * 100
+    m = _euclidean(pts)
+    assert np.array_equal(candidate_table(m, 6), neighbour_table(m, 6))
+
+
 def test_alpha_table_bad_inputs():
     m = np.ones((5, 5))
     with pytest.raises(ParameterError, match="k"):

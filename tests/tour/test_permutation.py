@@ -191,7 +191,11 @@ def test_three_opt_move_gain_is_the_cost_change(seed, n, k):
     rng = np.random.default_rng(seed)
     m = _points_matrix(seed, n)
     aux = make_aux(neighbour_table(m), nearest_fallback=True, neighbours=k)
-    _apply_moves(_three_opt_move, rng.permutation(n).astype(np.int64), m, aux.neighbours, rng)
+    for deep in (True, False):  # 3-opt moves too (from THREE_OPT_FROM cities), 2-opt only
+        def move(*args, deep=deep):
+            return _three_opt_move(*args, deep)
+
+        _apply_moves(move, rng.permutation(n).astype(np.int64), m, aux.neighbours, rng)
 
 
 def _apply_moves(move, tour: np.ndarray, m: np.ndarray, nb: np.ndarray, rng) -> int:
