@@ -237,12 +237,18 @@ def _robotsp(data: Path) -> dict[str, Any]:
     try:
         from subtask_opt.arm.ik import IKParams
         from subtask_opt.arm.poses import make_targets
-        from subtask_opt.arm.robotsp_bench import HOME_DEG, _load
         from subtask_opt.arm.scene import Scene
         from subtask_opt.arm.serial import load_serial_arm
         from subtask_opt.arm.serial_problem import SerialProblem
     except ImportError as exc:
         return {"unavailable": f"no serial arms in this tree ({exc.name})"}
+    try:
+        from subtask_opt.papers.robotsp import HOME_DEG, _load
+    except ImportError:  # before RoboTSP's benchmark moved to papers/
+        from subtask_opt.arm.robotsp_bench import (  # type: ignore[no-redef]
+            HOME_DEG,
+            _load,
+        )
     try:
         from subtask_opt.arm.serial_problem import solve_serial_problem as solve_serial
     except ImportError:  # before the #26 refactor
