@@ -63,7 +63,7 @@ class ConfiguredData(NamedTuple):
             bound). Empty (0, 0): the looser bound from ``dist``.
         lns: 0, or the large-neighbourhood steps every restart individual and child gets
             (:func:`large_neighbourhood_search`, the search of sets with many vertices,
-            symmetric legs or not); it replaces the local search then.
+            symmetric legs or not) after the local search.
     """
 
     dist: np.ndarray
@@ -546,13 +546,7 @@ def randomize(genes, data, aux, rng, best, best_len):
     except for a ``grasp_share`` of randomised nearest-neighbour tours; then (except for
     the paper's search) alternating decoding and local search (:func:`local_search`)."""
     n = data.dist.shape[0]
-    if data.lns > 0:
-        if best_len == 0 or rng.random() < 0.5:
-            random_insertion_tour(genes, n, data, rng)
-        else:
-            tsp.copy_run(genes, 0, best, 0, n)
-        large_neighbourhood_search(genes, n, data, aux, rng, data.lns)
-    elif data.search == tsp.SEARCH_PAPER:
+    if data.search == tsp.SEARCH_PAPER:
         tsp.random_tour(genes, data.dist, aux, rng, best, best_len)
     elif (best_len == 0 or not _has_near(data, n) or n < 8
             or rng.random() < aux.grasp_share):
@@ -562,6 +556,8 @@ def randomize(genes, data, aux, rng, best, best_len):
         tsp.copy_run(genes, 0, best, 0, n)
         iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
         local_search(genes, n, data, aux)
+    if data.lns > 0:
+        large_neighbourhood_search(genes, n, data, aux, rng, data.lns)
     return n
 
 
@@ -572,9 +568,6 @@ def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
     symmetric legs (``data.near``) after an iterated search of ``aux.kicks`` kicks, at
     least one without home (:func:`iterated_configured_search`)."""
     n = tsp.greedy_crossover(genes_a, len_a, genes_b, len_b, data.dist, aux, rng, child)
-    if data.lns > 0:
-        large_neighbourhood_search(child, n, data, aux, rng, data.lns)
-        return n
     # without home at least one kick: the configuration kicks are what moves the elbow split
     kicks = aux.kicks if data.home_out.shape[0] > 0 else max(1, aux.kicks)
     if data.search != tsp.SEARCH_PAPER:
@@ -582,6 +575,8 @@ def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
             local_search(child, n, data, aux)
             iterated_configured_search(child, n, data, aux, rng, kicks)
         local_search(child, n, data, aux)
+    if data.lns > 0:
+        large_neighbourhood_search(child, n, data, aux, rng, data.lns)
     return n
 
 
@@ -991,15 +986,3 @@ def large_neighbourhood_search(genes, n, data, aux, rng, steps, temperature0=LNS
     for k in range(n):
         genes[k] = best_sets[k]
     return best
-
-
-@njit(cache=True)
-def random_insertion_tour(genes, n, data, rng):
-    """An order built by inserting the sets in random order, each at its cheapest place
-    and vertex."""
-    sets = np.empty(n, dtype=np.int64)
-    vert = np.empty(n, dtype=np.int64)
-    removed = np.arange(n)
-    _insert_all(sets, vert, 0, removed, n, data, rng, 0.0)
-    for k in range(n):
-        genes[k] = sets[k]
