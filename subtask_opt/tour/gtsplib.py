@@ -41,8 +41,9 @@ PROBLEM_TYPES = ("GTSP", "AGTSP", "PCGLNS")
 EDGE_WEIGHT_TYPES = ("EUC_2D", "CEIL_2D", "GEO", "ATT", "EXPLICIT")
 EDGE_WEIGHT_FORMATS = ("FULL_MATRIX", "UPPER_ROW", "LOWER_ROW", "UPPER_DIAG_ROW",
                        "LOWER_DIAG_ROW")
-MAX_VERTICES = 10_000
-"""Most vertices a file may have (the dense matrix: 800 MB of float64 at the limit)."""
+MAX_VERTICES = 5_000
+"""Most vertices a file may have (each dense (M, M) copy is 200 MB of float64 at the limit;
+the problem keeps three)."""
 FORBIDDEN = -1
 """The matrix entry of a forbidden arc in a PCGLNS file."""
 

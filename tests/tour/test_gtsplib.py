@@ -274,7 +274,7 @@ def test_problem_refuses_bad_sets():
     with pytest.raises(InputDataError, match="must be 4 whole numbers"):
         GtspProblem(w, np.array([0, 1, 2]))
     with pytest.raises(ParameterError, match="one vertex of each"):
-        GtspProblem(w, np.array([0, 1, 2, 2])).tour_cost([0, 1, 2])
+        GtspProblem(w, np.array([0, 1, 2, 2])).tour_cost([0, 2, 3])  # set 2 twice
 
 
 # --------------------------------------------------------------------------- shared data
