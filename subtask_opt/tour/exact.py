@@ -941,8 +941,6 @@ def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
     h.addCols(n_cols, np.concatenate([c[tail, head], np.zeros(m)]), np.zeros(n_cols),
               np.ones(n_cols), 0, np.array([], dtype=np.int32), np.array([], dtype=np.int32),
               np.array([]))
-    h.changeColsIntegrality(n_cols, np.arange(n_cols, dtype=np.int32),
-                            np.full(n_cols, highspy.HighsVarType.kInteger))
     for k in range(n):  # one node per cluster
         idx = (n_arcs + np.flatnonzero(cl == k)).astype(np.int32)
         h.addRow(1.0, 1.0, len(idx), idx, np.ones(len(idx)))
@@ -953,6 +951,22 @@ def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
             idx = np.concatenate([order[bounds[v]:bounds[v + 1]], [n_arcs + v]]).astype(np.int32)
             h.addRow(0.0, 0.0, len(idx), idx,
                      np.concatenate([np.ones(len(idx) - 1), [-1.0]]))
+    # the LP relaxation first, with every violated cluster cut found by a maximum flow from
+    # cluster 0 to each other cluster over the summed arc values
+    for _ in range(max_rounds):
+        status = _run_highs(h, deadline, "agtsp_optimum: not proven within the time limit")
+        if status != highspy.HighsModelStatus.kOptimal:
+            break  # infeasible or stuck: the integer loop below says why
+        x = np.asarray(h.getSolution().col_value)[:n_arcs]
+        cuts = _cluster_cuts(n, cl[tail], cl[head], x)
+        if not cuts:
+            break
+        for inside_clusters in cuts:
+            inside = np.isin(cl, inside_clusters)
+            idx = np.flatnonzero(inside[tail] & ~inside[head]).astype(np.int32)
+            h.addRow(1.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
+    h.changeColsIntegrality(n_cols, np.arange(n_cols, dtype=np.int32),
+                            np.full(n_cols, highspy.HighsVarType.kInteger))
     start_solution = None
     if incumbent is not None:
         tour = np.asarray(incumbent, dtype=np.int64)
@@ -993,6 +1007,62 @@ def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
             idx = np.flatnonzero(inside[tail] & ~inside[head]).astype(np.int32)
             h.addRow(1.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
     raise SubtaskOptError(f"agtsp_optimum: no single tour after {max_rounds} rounds of cuts")
+
+
+def _cluster_cuts(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray,
+                  tol: float = 1e-6) -> list[np.ndarray]:
+    """Unions S of clusters that the arc values ``x`` (arcs from cluster a to b) leave by
+    less than 1: for each cluster k, a minimum cut between cluster 0 and k, both ways."""
+    cap = np.zeros((n, n))
+    np.add.at(cap, (a, b), np.maximum(x, 0.0))
+    np.fill_diagonal(cap, 0.0)
+    cuts: list[np.ndarray] = []
+    seen: set[bytes] = set()
+    for k in range(1, n):
+        for source, sink in ((0, k), (k, 0)):
+            value, side = _min_cut(cap, source, sink, 1.0 - tol)
+            if value >= 1.0 - tol:
+                continue
+            key = side.tobytes()
+            if key not in seen:
+                seen.add(key)
+                cuts.append(np.flatnonzero(side))
+    return cuts
+
+
+def _min_cut(cap: np.ndarray, source: int, sink: int, enough: float
+             ) -> tuple[float, np.ndarray]:
+    """Maximum flow by shortest augmenting paths (Edmonds-Karp) on the dense capacities,
+    stopped once it reaches ``enough``; returns the flow and the source side of a minimum
+    cut (the nodes the residual graph reaches)."""
+    residual = cap.copy()
+    n = cap.shape[0]
+    flow = 0.0
+    while True:
+        parent = np.full(n, -1)
+        parent[source] = source
+        queue = [source]
+        while queue and parent[sink] < 0:
+            nxt = []
+            for u in queue:
+                for v in np.flatnonzero((residual[u] > 1e-12) & (parent < 0)).tolist():
+                    parent[v] = u
+                    nxt.append(v)
+            queue = nxt
+        if parent[sink] < 0:
+            return flow, parent >= 0
+        path = []
+        v = sink
+        while v != source:
+            path.append((int(parent[v]), v))
+            v = int(parent[v])
+        push = min(residual[u, w] for u, w in path)
+        for u, w in path:
+            residual[u, w] -= push
+            residual[w, u] += push
+        flow += push
+        if flow >= enough:
+            return flow, parent >= 0
 
 
 def gtsp_set_optimum(problem: Any, *, incumbent: np.ndarray | Sequence[int] | None = None,

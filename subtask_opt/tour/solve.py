@@ -336,8 +336,10 @@ def solve(problem: TourProblem, *, seed: int = 0,
     """Find a minimum-time closed tour through the problem's subtasks (or nodes).
 
     Args:
-        problem: what to solve (a matrix or a clustered problem; arm problems go
-            through :func:`subtask_opt.solve`, which compiles them into one).
+        problem: what to solve (a matrix or a clustered problem, or a
+            :class:`~subtask_opt.tour.problem.GtspProblem` of sets of any size, as
+            :mod:`~subtask_opt.tour.gtsplib` reads them; arm problems go through
+            :func:`subtask_opt.solve`, which compiles them into one).
         seed: random seed in [0, 2**63); the same seed gives the same result.
         stop: one stopping criterion or a list (any of them stops the run);
             default: ``params.default_stop(N, configured=...)`` (``configured``: the
