@@ -614,8 +614,8 @@ LNS_POLISH_SLACK = 0.005
 """A changed tour up to this share longer than the current one is polished; the others
 are rejected as they are."""
 LNS_TEMPERATURE = 0.003
-"""Initial annealing temperature of each search, as a share of the tour's cost per set...
-(a worse tour is kept with probability exp(-excess / T)); it cools to 1/100 of that."""
+"""Initial annealing temperature of each search, as a share of the start tour's cost (a worse
+tour is kept with probability exp(-excess / T)); it cools geometrically to 1/100 of that."""
 
 
 @njit(cache=True)
