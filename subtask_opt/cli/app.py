@@ -42,7 +42,18 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from subtask_opt.cli import agv, batch, grid, polygon, reactive, reproduce, robotsp, solve, tsp
+    from subtask_opt.cli import (
+        agv,
+        batch,
+        grid,
+        gtsp,
+        polygon,
+        reactive,
+        reproduce,
+        robotsp,
+        solve,
+        tsp,
+    )
 
     parser = _Parser(
         prog="subtask-opt",
@@ -58,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.required = True
     solve.register(root)
     tsp.register(root)
+    gtsp.register(root)
     batch.register(root)
     reproduce.register(root)
     for family in (grid, polygon, reactive, agv, robotsp):

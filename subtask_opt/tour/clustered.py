@@ -61,6 +61,9 @@ class ConfiguredData(NamedTuple):
             relocations' lower bound, which skips most places unread when targets have
             many configurations (legs blocked later only raise legs, so it stays a
             bound). Empty (0, 0): the looser bound from ``dist``.
+        lns: 0, or the large-neighbourhood steps every restart individual and child gets
+            (:func:`large_neighbourhood_search`, the search of sets with many vertices,
+            symmetric legs or not) after the local search.
     """
 
     dist: np.ndarray
@@ -71,6 +74,7 @@ class ConfiguredData(NamedTuple):
     search: float
     near: np.ndarray = np.zeros((0, 0), dtype=np.int64)
     cheapest: np.ndarray = np.zeros((0, 0))
+    lns: int = 0
 
 
 @njit(cache=True)
@@ -552,6 +556,8 @@ def randomize(genes, data, aux, rng, best, best_len):
         tsp.copy_run(genes, 0, best, 0, n)
         iterated_configured_search(genes, n, data, aux, rng, max(1, aux.kicks))
         local_search(genes, n, data, aux)
+    if data.lns > 0:
+        large_neighbourhood_search(genes, n, data, aux, rng, data.lns)
     return n
 
 
@@ -569,6 +575,8 @@ def crossover(genes_a, len_a, genes_b, len_b, data, aux, rng, child):
             local_search(child, n, data, aux)
             iterated_configured_search(child, n, data, aux, rng, kicks)
         local_search(child, n, data, aux)
+    if data.lns > 0:
+        large_neighbourhood_search(child, n, data, aux, rng, data.lns)
     return n
 
 
@@ -587,3 +595,394 @@ def no_improvement(genes, length, data, aux):
 OPERATORS = OperatorSet(randomize, tour_cost, crossover, no_mutation, no_improvement)
 """The clustered (configured) permutation kind's operators (registered by
 :mod:`subtask_opt.chromosomes`)."""
+
+
+# --------------------------------------------------------------------------- large sets
+#
+# The GTSPLIB search (data.lns > 0): sets of many vertices, symmetric or not. Every operator
+# ends in a large-neighbourhood search after GLNS (Smith and Imeson 2017): remove a random
+# number of sets (at random, a segment of the tour, the most expensive ones, or a set and
+# its nearest), put each back at its cheapest place in its cheapest vertex (the unified
+# insertion), re-choose every vertex for the new order (the layered shortest path) and
+# move single sets to their best place until none improves; a simulated-annealing test
+# keeps the change or not. The tour is a list of sets with a vertex (a row of data.legs)
+# each.
+
+LNS_REMOVE_SHARE = 0.25
+"""Most sets one large-neighbourhood step removes, as a share of the tour (GLNS: 30%)."""
+LNS_POLISH_SLACK = 0.005
+"""A changed tour up to this share longer than the current one is polished; the others
+are rejected as they are."""
+LNS_TEMPERATURE = 0.003
+"""Initial annealing temperature of each search, as a share of the start tour's cost (a worse
+tour is kept with probability exp(-excess / T)); it cools geometrically to 1/100 of that."""
+
+
+@njit(cache=True)
+def _sp_tour(sets, n, data, vert, work):
+    """Best vertex of every set for the cyclic order ``sets[:n]`` (``vert[k]`` receives the
+    leg row of set ``sets[k]``'s vertex); returns the tour's cost. The layered shortest path
+    of :func:`decode` from the smallest set (exact whatever the start)."""
+    off = data.offsets
+    s0 = 0
+    for k in range(1, n):
+        if off[sets[k] + 1] - off[sets[k]] < off[sets[s0] + 1] - off[sets[s0]]:
+            s0 = k
+    for k in range(n):
+        work[k] = sets[(s0 + k) % n]
+    configs = np.empty(data.dist.shape[0], dtype=np.int64)
+    cost = decode(work, n, data, configs)
+    for k in range(n):
+        vert[k] = off[sets[k]] + configs[sets[k]]
+    return cost
+
+
+@njit(cache=True, inline="always")
+def _cycle_cost(vert, n, legs):
+    total = 0.0
+    for k in range(n):
+        total += legs[vert[k], vert[(k + 1) % n]]
+    return total
+
+
+@njit(cache=True)
+def _best_insertion(s, sets, vert, m, data):
+    """Cheapest (extra cost, position, vertex row) to put set ``s`` into the cyclic tour
+    ``sets[:m]`` (between position p and p + 1), over every place and vertex of ``s``."""
+    off = data.offsets
+    legs = data.legs
+    best = np.inf
+    best_p = 0
+    best_r = off[s]
+    for p in range(m):
+        a = vert[p]
+        b = vert[(p + 1) % m]
+        ab = legs[a, b]
+        for r in range(off[s], off[s + 1]):
+            d = legs[a, r] + legs[r, b] - ab
+            if d < best:
+                best = d
+                best_p = p
+                best_r = r
+    return best, best_p, best_r
+
+
+@njit(cache=True, inline="always")
+def _insert_at(sets, vert, m, p, s, r):
+    """Put set ``s`` (vertex row ``r``) at index ``p + 1`` of ``sets[:m]`` (after
+    position p)."""
+    for q in range(m, p + 1, -1):
+        sets[q] = sets[q - 1]
+        vert[q] = vert[q - 1]
+    sets[p + 1] = s
+    vert[p + 1] = r
+
+
+@njit(cache=True, inline="always")
+def _remove_at(sets, vert, m, p):
+    for q in range(p, m - 1):
+        sets[q] = sets[q + 1]
+        vert[q] = vert[q + 1]
+
+
+@njit(cache=True)
+def _insert_all(sets, vert, m, removed, n_removed, data, rng, noise):
+    """Insert the sets ``removed[:n_removed]`` in random order, each at its cheapest place
+    and vertex (a ``noise`` share of random spread on the insertion costs); returns m."""
+    for i in range(n_removed - 1, 0, -1):
+        j = rng.integers(0, i + 1)
+        removed[i], removed[j] = removed[j], removed[i]
+    off = data.offsets
+    legs = data.legs
+    for i in range(n_removed):
+        s = removed[i]
+        if m == 0:
+            sets[0] = s
+            vert[0] = off[s] + rng.integers(0, off[s + 1] - off[s])
+            m = 1
+            continue
+        if noise > 0.0:
+            best = np.inf
+            best_p = 0
+            best_r = off[s]
+            for p in range(m):
+                a = vert[p]
+                b = vert[(p + 1) % m]
+                ab = legs[a, b]
+                for r in range(off[s], off[s + 1]):
+                    d = (legs[a, r] + legs[r, b] - ab) * (1.0 + noise * rng.random())
+                    if d < best:
+                        best = d
+                        best_p = p
+                        best_r = r
+        else:
+            _, best_p, best_r = _best_insertion(s, sets, vert, m, data)
+        _insert_at(sets, vert, m, best_p, s, best_r)
+        m += 1
+    return m
+
+
+@njit(cache=True)
+def _move_opt(sets, vert, n, data):
+    """Take every set out in turn and put it back at its cheapest place and vertex
+    (GLNS's moveopt), until a sweep gains nothing; returns the gain."""
+    legs = data.legs
+    gain = 0.0
+    for _ in range(50):
+        swept = 0.0
+        for v in range(n):
+            # find set v's position
+            p = 0
+            for k in range(n):
+                if sets[k] == v:
+                    p = k
+                    break
+            a = vert[(p - 1) % n]
+            r = vert[p]
+            b = vert[(p + 1) % n]
+            saved = legs[a, r] + legs[r, b] - legs[a, b]
+            _remove_at(sets, vert, n, p)
+            extra, q, rr = _best_insertion(v, sets, vert, n - 1, data)
+            if extra < saved - 1e-9 * max(1.0, saved):
+                _insert_at(sets, vert, n - 1, q, v, rr)
+                swept += saved - extra
+            else:  # back where it was
+                _insert_at(sets, vert, n - 1, p - 1, v, r)
+        gain += swept
+        if swept <= 0.0:
+            break
+    return gain
+
+
+@njit(cache=True)
+def _move_opt_near(sets, vert, n, data):
+    """:func:`_move_opt` over the places next to each set's ``data.near`` neighbours and
+    its own place (symmetric legs, read along rows); returns the gain."""
+    legs = data.legs
+    off = data.offsets
+    near = data.near
+    pos = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        pos[sets[k]] = k
+    gain = 0.0
+    for _ in range(50):
+        swept = 0.0
+        for v in range(n):
+            p = pos[v]
+            a = vert[(p - 1) % n]
+            r = vert[p]
+            b = vert[(p + 1) % n]
+            saved = legs[a, r] + legs[b, r] - legs[a, b]
+            eps = 1e-9 * max(1.0, saved)
+            best = saved - eps
+            best_x = -1
+            best_r = -1
+            for t in range(-1, near.shape[1]):
+                for side in range(2):
+                    if t < 0:
+                        if side == 1:
+                            break
+                        x = (p - 1) % n
+                        y = (p + 1) % n
+                    else:
+                        q = pos[near[v, t]]
+                        if q == p:
+                            continue
+                        x = q if side == 0 else (q - 1) % n
+                        y = (q + 1) % n if side == 0 else q
+                        if x == p:
+                            x = (p - 1) % n
+                        if y == p:
+                            y = (p + 1) % n
+                        if x == (p - 1) % n and y == (p + 1) % n:
+                            continue  # v's own place, tried at t = -1
+                    vx = vert[x]
+                    vy = vert[y]
+                    xy = legs[vx, vy]
+                    for rr in range(off[v], off[v + 1]):
+                        d = legs[rr, vx] + legs[rr, vy] - xy
+                        if d < best:
+                            best = d
+                            best_x = x
+                            best_r = rr
+            if best_x < 0:
+                continue
+            swept += saved - best
+            if best_x == (p - 1) % n and vert[(best_x + 1) % n] == r:  # same place
+                vert[p] = best_r
+                continue
+            # move v from index p to just after index best_x
+            if best_x > p:
+                for q in range(p, best_x):
+                    sets[q] = sets[q + 1]
+                    vert[q] = vert[q + 1]
+                    pos[sets[q]] = q
+                sets[best_x] = v
+                vert[best_x] = best_r
+                pos[v] = best_x
+            else:
+                for q in range(p, best_x + 1, -1):
+                    sets[q] = sets[q - 1]
+                    vert[q] = vert[q - 1]
+                    pos[sets[q]] = q
+                sets[best_x + 1] = v
+                vert[best_x + 1] = best_r
+                pos[v] = best_x + 1
+        gain += swept
+        if swept <= 0.0:
+            break
+    return gain
+
+
+@njit(cache=True)
+def _two_opt(sets, vert, n, legs):
+    """First-improvement 2-opt on the fixed vertices (symmetric legs); returns the gain."""
+    gain = 0.0
+    improved = True
+    while improved:
+        improved = False
+        for i in range(n - 1):
+            a = vert[i]
+            b = vert[i + 1]
+            ab = legs[a, b]
+            for j in range(i + 2, n if i > 0 else n - 1):
+                c = vert[j]
+                d = vert[(j + 1) % n]
+                delta = legs[a, c] + legs[b, d] - ab - legs[c, d]
+                if delta < -1e-9 * max(1.0, ab):
+                    lo = i + 1
+                    hi = j
+                    while lo < hi:
+                        sets[lo], sets[hi] = sets[hi], sets[lo]
+                        vert[lo], vert[hi] = vert[hi], vert[lo]
+                        lo += 1
+                        hi -= 1
+                    gain -= delta
+                    improved = True
+                    b = vert[i + 1]
+                    ab = legs[a, b]
+    return gain
+
+
+@njit(cache=True)
+def _polish(sets, vert, n, data, work, symmetric, aux, strong):
+    """Vertices re-chosen, single sets moved (and 2-opt with symmetric legs) until nothing
+    improves; returns the cost. ``strong`` with symmetric legs: the clustered chromosome's
+    own search (:func:`local_search`: neighbour-list 2-opt and Or-opt on the decoded
+    vertices, vertex-choosing relocations) first."""
+    if strong and symmetric:
+        local_search(sets, n, data, aux)
+    cost = _sp_tour(sets, n, data, vert, work)
+    for _ in range(20):
+        if symmetric:
+            _move_opt_near(sets, vert, n, data)
+            _two_opt(sets, vert, n, data.legs)
+        else:
+            _move_opt(sets, vert, n, data)
+        new = _sp_tour(sets, n, data, vert, work)
+        if new >= cost - 1e-9 * max(1.0, cost):
+            cost = min(cost, new)
+            break
+        cost = new
+    return _cycle_cost(vert, n, data.legs)
+
+
+@njit(cache=True)
+def _remove_sets(sets, vert, n, k, data, rng, removed):
+    """Take ``k`` sets out of the tour by one of four rules (random, a segment, the most
+    expensive, a set and its nearest); ``removed`` receives them; returns the tour's
+    new length."""
+    legs = data.legs
+    rule = rng.integers(0, 4)
+    take = np.zeros(data.dist.shape[0], dtype=np.bool_)
+    if rule == 0:  # random sets
+        for i in range(k):
+            removed[i] = sets[i]
+        for i in range(k, n):
+            j = rng.integers(0, i + 1)
+            if j < k:
+                removed[j] = sets[i]
+        for i in range(k):
+            take[removed[i]] = True
+    elif rule == 1:  # a segment
+        p = rng.integers(0, n)
+        for i in range(k):
+            take[sets[(p + i) % n]] = True
+    elif rule == 2:  # the most expensive sets to visit (randomised)
+        score = np.empty(n)
+        for p in range(n):
+            a = vert[(p - 1) % n]
+            r = vert[p]
+            b = vert[(p + 1) % n]
+            score[p] = -(legs[a, r] + legs[r, b] - legs[a, b]) * (rng.random() ** 2)
+        idx = np.argsort(score)
+        for i in range(k):
+            take[sets[idx[i]]] = True
+    else:  # a random set and its nearest
+        c = sets[rng.integers(0, n)]
+        d = np.empty(n)
+        for p in range(n):
+            d[p] = data.dist[c, sets[p]] + data.dist[sets[p], c]
+        idx = np.argsort(d)
+        for i in range(k):
+            take[sets[idx[i]]] = True
+    m = 0
+    r = 0
+    for p in range(n):
+        if take[sets[p]]:
+            removed[r] = sets[p]
+            r += 1
+        else:
+            sets[m] = sets[p]
+            vert[m] = vert[p]
+            m += 1
+    return m
+
+
+@njit(cache=True)
+def large_neighbourhood_search(genes, n, data, aux, rng, steps, temperature0=LNS_TEMPERATURE,
+                               slack=LNS_POLISH_SLACK, share=LNS_REMOVE_SHARE, strong=True):
+    """``steps`` annealed remove-and-insert steps from the order ``genes[:n]``, each
+    polished (:func:`_polish`); ``genes`` receives the best order found. Returns its cost."""
+    legs = data.legs
+    symmetric = data.near.shape[0] > 0
+    sets = np.empty(n, dtype=np.int64)
+    vert = np.empty(n, dtype=np.int64)
+    work = np.empty(n, dtype=np.int64)
+    removed = np.empty(n, dtype=np.int64)
+    for k in range(n):
+        sets[k] = genes[k]
+    cost = _polish(sets, vert, n, data, work, symmetric, aux, strong)
+    best_sets = sets.copy()
+    best_vert = vert.copy()
+    best = cost
+    cur_sets = sets.copy()
+    cur_vert = vert.copy()
+    t0 = temperature0 * cost
+    most = max(1, min(n - 2, int(share * n)))
+    for step in range(steps):
+        temperature = t0 * 0.01 ** (step / max(1, steps - 1))
+        for k in range(n):
+            sets[k] = cur_sets[k]
+            vert[k] = cur_vert[k]
+        k_out = 1 + rng.integers(0, most)
+        m = _remove_sets(sets, vert, n, k_out, data, rng, removed)
+        m = _insert_all(sets, vert, m, removed, n - m, data, rng,
+                        0.0 if rng.random() < 0.5 else 0.1)
+        new = _cycle_cost(vert, n, legs)
+        if new < cost * (1.0 + slack):  # hopeless changes skip the polish
+            new = _polish(sets, vert, n, data, work, symmetric, aux, strong)
+        if new < cost - 1e-9 * max(1.0, cost) or rng.random() < np.exp(
+                -(new - cost) / max(temperature, 1e-300)):
+            cost = new
+            for k in range(n):
+                cur_sets[k] = sets[k]
+                cur_vert[k] = vert[k]
+            if new < best - 1e-9 * max(1.0, best):
+                best = new
+                for k in range(n):
+                    best_sets[k] = sets[k]
+                    best_vert[k] = vert[k]
+    for k in range(n):
+        genes[k] = best_sets[k]
+    return best

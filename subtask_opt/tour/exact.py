@@ -891,3 +891,190 @@ class _GtspModel:
         rank = np.searchsorted(chosen, np.arange(self.m))
         order = _walk(self.n, rank[a], rank[b])
         return chosen[order]
+
+
+def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
+                  incumbent: np.ndarray | Sequence[int] | None = None,
+                  time_limit: float | None = None,
+                  max_rounds: int = 500) -> tuple[float, np.ndarray, np.ndarray]:
+    """Certified minimum closed tour through one node of every cluster, any costs.
+
+    The asymmetric generalised TSP (GTSPLIB's AGTSP, forbidden arcs as inf) as an arc
+    MILP in HiGHS: binary ``x_uv`` per finite arc between nodes of different clusters and
+    ``y_v`` per node; one node per cluster; one arc in and one out of a chosen node, none
+    at the others; cluster subtours of each integer answer cut off (at least one arc
+    leaves every proper union of clusters the answer closes a cycle on) until it is one
+    tour. ``incumbent`` (nodes, one per cluster, in tour order) starts the search.
+
+    Returns ``(cost, order, nodes)`` as :func:`gtsp_optimum`. Raises
+    :class:`SubtaskOptError` if no tour exists or none is proven within ``time_limit``.
+    """
+    c = np.asarray(cost, dtype=float)
+    if c.ndim != 2 or c.shape[0] != c.shape[1] or c.shape[0] < 3 or np.isnan(c).any():
+        raise ParameterError(f"agtsp_optimum needs a square cost matrix of at least 3 x 3 "
+                             f"(inf: forbidden), got shape {c.shape}")
+    cl = np.asarray(clusters)
+    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
+        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
+                             f"got shape {cl.shape} of {cl.dtype}")
+    n = int(cl.max()) + 1
+    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
+        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
+                             f"got {sorted(set(cl.tolist()))}")
+    require_int("agtsp_optimum", "max_rounds", max_rounds, 1)
+    if time_limit is not None and not (isinstance(time_limit, (int, float))
+                                       and time_limit > 0):
+        raise ParameterError(f"agtsp_optimum.time_limit must be > 0 s, got {time_limit!r}")
+    try:
+        import highspy
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise SubtaskOptError("agtsp_optimum needs highspy") from exc
+    deadline = None if time_limit is None else time.perf_counter() + float(time_limit)
+    m = c.shape[0]
+    tail, head = np.nonzero((cl[:, None] != cl[None, :]) & np.isfinite(c))
+    n_arcs = len(tail)
+    with quiet_stdout():
+        h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    h.setOptionValue("mip_rel_gap", 0.0)
+    n_cols = n_arcs + m
+    h.addCols(n_cols, np.concatenate([c[tail, head], np.zeros(m)]), np.zeros(n_cols),
+              np.ones(n_cols), 0, np.array([], dtype=np.int32), np.array([], dtype=np.int32),
+              np.array([]))
+    for k in range(n):  # one node per cluster
+        idx = (n_arcs + np.flatnonzero(cl == k)).astype(np.int32)
+        h.addRow(1.0, 1.0, len(idx), idx, np.ones(len(idx)))
+    for ends in (tail, head):  # one arc out of (into) a chosen node, none elsewhere
+        order = np.argsort(ends, kind="stable")
+        bounds = np.searchsorted(ends[order], np.arange(m + 1))
+        for v in range(m):
+            idx = np.concatenate([order[bounds[v]:bounds[v + 1]], [n_arcs + v]]).astype(np.int32)
+            h.addRow(0.0, 0.0, len(idx), idx,
+                     np.concatenate([np.ones(len(idx) - 1), [-1.0]]))
+    # the LP relaxation first, with every violated cluster cut found by a maximum flow from
+    # cluster 0 to each other cluster over the summed arc values
+    for _ in range(max_rounds):
+        status = _run_highs(h, deadline, "agtsp_optimum: not proven within the time limit")
+        if status != highspy.HighsModelStatus.kOptimal:
+            break  # infeasible or stuck: the integer loop below says why
+        x = np.asarray(h.getSolution().col_value)[:n_arcs]
+        cuts = _cluster_cuts(n, cl[tail], cl[head], x)
+        if not cuts:
+            break
+        for inside_clusters in cuts:
+            inside = np.isin(cl, inside_clusters)
+            idx = np.flatnonzero(inside[tail] & ~inside[head]).astype(np.int32)
+            h.addRow(1.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
+    h.changeColsIntegrality(n_cols, np.arange(n_cols, dtype=np.int32),
+                            np.full(n_cols, highspy.HighsVarType.kInteger))
+    start_solution = None
+    if incumbent is not None:
+        tour = np.asarray(incumbent, dtype=np.int64)
+        if (tour.ndim != 1 or np.any((tour < 0) | (tour >= m))
+                or sorted(cl[tour].tolist()) != list(range(n))):
+            raise ParameterError("agtsp_optimum.incumbent must visit one node of every cluster")
+        arc = {(int(u), int(v)): a for a, (u, v) in
+               enumerate(zip(tail.tolist(), head.tolist(), strict=True))}
+        legs = list(zip(tour.tolist(), np.roll(tour, -1).tolist(), strict=True))
+        if all(leg in arc for leg in legs):
+            start_solution = np.zeros(n_cols)
+            start_solution[[arc[leg] for leg in legs]] = 1.0
+            start_solution[n_arcs + tour] = 1.0
+    for _ in range(max_rounds):
+        if start_solution is not None:
+            sol = highspy.HighsSolution()
+            sol.col_value = start_solution.tolist()
+            sol.value_valid = True
+            h.setSolution(sol)
+        status = _run_highs(h, deadline, "agtsp_optimum: not proven within the time limit")
+        if status == highspy.HighsModelStatus.kInfeasible:
+            raise SubtaskOptError("agtsp_optimum: no tour avoids the forbidden arcs")
+        if status != highspy.HighsModelStatus.kOptimal:
+            raise SubtaskOptError(f"HiGHS did not solve the GTSP: "
+                                  f"{h.modelStatusToString(status)}")
+        x = np.asarray(h.getSolution().col_value)[:n_arcs] > 0.5
+        comps = _components(n, cl[tail[x]], cl[head[x]])
+        if len(comps) == 1:
+            nxt = dict(zip(tail[x].tolist(), head[x].tolist(), strict=True))
+            first = next(v for v in nxt if cl[v] == 0)
+            nodes = [first]
+            while len(nodes) < n:
+                nodes.append(nxt[nodes[-1]])
+            out = np.array(nodes, dtype=np.int64)
+            return float(c[out, np.roll(out, -1)].sum()), cl[out], out
+        for comp in comps:  # an arc must leave every cycle's union of clusters
+            inside = np.isin(cl, comp)
+            idx = np.flatnonzero(inside[tail] & ~inside[head]).astype(np.int32)
+            h.addRow(1.0, highspy.kHighsInf, len(idx), idx, np.ones(len(idx)))
+    raise SubtaskOptError(f"agtsp_optimum: no single tour after {max_rounds} rounds of cuts")
+
+
+def _cluster_cuts(n: int, a: np.ndarray, b: np.ndarray, x: np.ndarray,
+                  tol: float = 1e-6) -> list[np.ndarray]:
+    """Unions S of clusters that the arc values ``x`` (arcs from cluster a to b) leave by
+    less than 1: for each cluster k, a minimum cut between cluster 0 and k, both ways."""
+    cap = np.zeros((n, n))
+    np.add.at(cap, (a, b), np.maximum(x, 0.0))
+    np.fill_diagonal(cap, 0.0)
+    cuts: list[np.ndarray] = []
+    seen: set[bytes] = set()
+    for k in range(1, n):
+        for source, sink in ((0, k), (k, 0)):
+            value, side = _min_cut(cap, source, sink, 1.0 - tol)
+            if value >= 1.0 - tol:
+                continue
+            key = side.tobytes()
+            if key not in seen:
+                seen.add(key)
+                cuts.append(np.flatnonzero(side))
+    return cuts
+
+
+def _min_cut(cap: np.ndarray, source: int, sink: int, enough: float
+             ) -> tuple[float, np.ndarray]:
+    """Maximum flow by shortest augmenting paths (Edmonds-Karp) on the dense capacities,
+    stopped once it reaches ``enough``; returns the flow and the source side of a minimum
+    cut (the nodes the residual graph reaches)."""
+    residual = cap.copy()
+    n = cap.shape[0]
+    flow = 0.0
+    while True:
+        parent = np.full(n, -1)
+        parent[source] = source
+        queue = [source]
+        while queue and parent[sink] < 0:
+            nxt = []
+            for u in queue:
+                for v in np.flatnonzero((residual[u] > 1e-12) & (parent < 0)).tolist():
+                    parent[v] = u
+                    nxt.append(v)
+            queue = nxt
+        if parent[sink] < 0:
+            return flow, parent >= 0
+        path = []
+        v = sink
+        while v != source:
+            path.append((int(parent[v]), v))
+            v = int(parent[v])
+        push = min(residual[u, w] for u, w in path)
+        for u, w in path:
+            residual[u, w] -= push
+            residual[w, u] += push
+        flow += push
+        if flow >= enough:
+            return flow, parent >= 0
+
+
+def gtsp_set_optimum(problem: Any, *, incumbent: np.ndarray | Sequence[int] | None = None,
+                     time_limit: float | None = None) -> tuple[float, np.ndarray]:
+    """Certified optimum of a :class:`~subtask_opt.tour.problem.GtspProblem` (closed tour):
+    :func:`gtsp_optimum` for finite symmetric weights, :func:`agtsp_optimum` otherwise.
+    ``incumbent``: vertices in tour order, one per set. Returns ``(cost, vertices)``, the
+    vertices in tour order from set 0."""
+    w = np.array(problem.weights, dtype=float)
+    sets = np.asarray(problem.sets, dtype=np.int64)
+    if np.all(np.isfinite(w)) and np.array_equal(w, w.T):
+        cost, _, nodes = gtsp_optimum(w, sets, incumbent=incumbent, time_limit=time_limit)
+    else:
+        cost, _, nodes = agtsp_optimum(w, sets, incumbent=incumbent, time_limit=time_limit)
+    return cost, nodes

@@ -67,6 +67,7 @@ from subtask_opt.tour.precedence import PinnedAux, make_pinned_aux
 from subtask_opt.tour.problem import (
     MAX_NODES,
     ClusteredProblem,
+    GtspProblem,
     MatrixProblem,
     TourProblem,
 )
@@ -251,8 +252,9 @@ class Result:
             With a home it describes the closed tour through the home (the
             last subtask row); for an open path, the tour closed by its return.
         configurations: the node chosen in each cluster (by cluster index) of a
-            clustered problem; an arm problem's (N, n) joint vector of every target
-            (input order); None for a matrix problem.
+            clustered problem; the vertex chosen in each set (by set index) of a
+            :class:`~subtask_opt.tour.problem.GtspProblem`; an arm problem's (N, n)
+            joint vector of every target (input order); None for a matrix problem.
         cpu: CPU seconds per phase of an arm problem (``ik``, ``collision``,
             ``matrix``, ``search``, and numba's ``compile`` apart); empty for a tour
             problem.
@@ -356,8 +358,10 @@ def solve(problem: TourProblem, *, seed: int = 0,
     """Find a minimum-time closed tour through the problem's subtasks (or nodes).
 
     Args:
-        problem: what to solve (a matrix or a clustered problem; arm problems go
-            through :func:`subtask_opt.solve`, which compiles them into one).
+        problem: what to solve (a matrix or a clustered problem, or a
+            :class:`~subtask_opt.tour.problem.GtspProblem` of sets of any size, as
+            :mod:`~subtask_opt.tour.gtsplib` reads them; arm problems go through
+            :func:`subtask_opt.solve`, which compiles them into one).
         seed: random seed in [0, 2**63); the same seed gives the same result.
         stop: one stopping criterion or a list (any of them stops the run);
             default: ``params.default_stop(N, configured=...)`` (``configured``: the
@@ -378,8 +382,9 @@ def solve(problem: TourProblem, *, seed: int = 0,
             searched on the cheapest-node costs and the nodes of that order are
             then decoded exactly (a heuristic; the bound stays valid).
     """
-    if not isinstance(problem, (MatrixProblem, ClusteredProblem)):
-        raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem or ArmProblem, "
+    if not isinstance(problem, (MatrixProblem, ClusteredProblem, GtspProblem)):
+        raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem, GtspProblem or "
+                             f"ArmProblem, "
                              f"got {type(problem).__name__}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
             0 <= seed < 2**63):
@@ -389,7 +394,7 @@ def solve(problem: TourProblem, *, seed: int = 0,
     elif not isinstance(params, SolverParams):
         raise ParameterError(f"solve: params must be a SolverParams, got {params!r}")
     cons, problem, canon = _shaped(problem, constraints)
-    configured = isinstance(problem, ClusteredProblem)
+    configured = isinstance(problem, (ClusteredProblem, GtspProblem))
     criteria = as_criteria(stop, params.default_stop(problem.size, configured=configured))
     runs = params.default_runs(problem.size, configured=configured)
     matrix = problem.matrix
@@ -397,15 +402,21 @@ def solve(problem: TourProblem, *, seed: int = 0,
     paper = params.preset == "paper"
     tensor = None
     data: np.ndarray | ConfiguredData
+    cdata = None
     if configured:
-        assert isinstance(problem, ClusteredProblem)
         from subtask_opt.tour.configurations import pack_data
 
         search = SEARCH_PAPER if paper else SEARCH_FAST
-        if canon.open_path:
+        if isinstance(problem, GtspProblem):
+            cdata = (problem.open_data(canon.first, canon.last) if canon.open_path
+                     else problem.configured_data())
+            data = cdata = cdata._replace(search=search)
+        elif canon.open_path:
+            assert isinstance(problem, ClusteredProblem)
             tensor = transform_tensor(problem.costs, canon)
             data = pack_data(tensor)[0]._replace(search=search)
         else:
+            assert isinstance(problem, ClusteredProblem)
             data = problem.configured_data()._replace(search=search)
         dist = data.dist
         kind = Kind.CONFIGURED_PERMUTATION
@@ -464,7 +475,15 @@ def solve(problem: TourProblem, *, seed: int = 0,
                          criteria=criteria, on_chunk=on_chunk, runs=runs)
     tour = _rotate(outcome.genes, canon.first)
     configs = None
-    if configured:
+    if isinstance(problem, GtspProblem):
+        assert cdata is not None
+        vertices = problem.decode(tour, cdata)[1]
+        configs = np.empty(n, dtype=np.int64)
+        configs[tour] = vertices
+        matrix = problem.weights[np.ix_(configs, configs)].copy()
+        np.fill_diagonal(matrix, 0.0)
+        matrix.setflags(write=False)
+    elif configured:
         assert isinstance(problem, ClusteredProblem)
         from subtask_opt.tour.configurations import best_configurations, induced_matrix
 
@@ -557,11 +576,17 @@ def _certify(problem: TourProblem, canon: Canonical, total: float,
     require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
     try:
         if configs is not None:
-            assert isinstance(problem, ClusteredProblem)
             if canon.open_path or canon.pairs.size:
                 return ("not certified: with chosen configurations only closed tours "
                         "without precedence are certified")
-            optimum = proven_configured_optimum(problem, tour, configs, time_limit)
+            if isinstance(problem, GtspProblem):
+                from subtask_opt.tour.exact import gtsp_set_optimum
+
+                optimum = gtsp_set_optimum(problem, incumbent=configs[tour],
+                                           time_limit=time_limit)[0]
+            else:
+                assert isinstance(problem, ClusteredProblem)
+                optimum = proven_configured_optimum(problem, tour, configs, time_limit)
         elif canon.open_path and not canon.pairs.size and problem.symmetric:
             m, offset = symmetric_path_matrix(problem.matrix, canon.first,
                                               None if canon.last < 0 else canon.last)
