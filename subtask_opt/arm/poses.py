@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
-from subtask_opt.base.files import MAX_JSON_DEPTH, json_depth
+from subtask_opt.base.files import parse_json
 
 AXIS_COLUMNS: tuple[str, ...] = ("x", "y", "z", "dx", "dy", "dz")
 POSE_COLUMNS: tuple[str, ...] = ("x", "y", "z", "qx", "qy", "qz", "qw")
@@ -184,22 +183,17 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
 
 
 def _read_text(path: Path, max_bytes: int) -> str:
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise InputDataError(f"cannot read target file {path}: {exc}") from None
-    if size > max_bytes:
-        raise InputDataError(f"target file {path} is {size} bytes, more than the "
-                             f"{max_bytes} allowed (max_bytes)")
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read target file {path}: {exc}") from None
+    from subtask_opt.base.files import read_text
+
+    return read_text(path, "target file", max_bytes=max_bytes)  # regular files only
 
 
 def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
     reader = csv.reader(io.StringIO(text))
-    rows = [r for r in reader if any(cell.strip() for cell in r)]
+    try:
+        rows = [r for r in reader if any(cell.strip() for cell in r)]
+    except csv.Error as exc:  # e.g. a field over the csv module's limit (an open quote)
+        raise InputDataError(f"target file {path}, line {reader.line_num}: {exc}") from None
     if not rows:
         raise InputDataError(f"target file {path} is empty")
     header = tuple(cell.strip().lower() for cell in rows[0])
@@ -226,15 +220,8 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
 
 
 def _parse_json(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
-    depth = json_depth(text)  # checked before parsing: no RecursionError
-    if depth > MAX_JSON_DEPTH:
-        raise InputDataError(f"target file {path}: brackets nested {depth} deep, deeper than "
-                             f"the limit of {MAX_JSON_DEPTH}")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputDataError(f"target file {path} is not valid JSON (line {exc.lineno}: "
-                             f"{exc.msg})") from None
+    # depth-, number- and surrogate-checked: no RecursionError, no 5,000-digit number
+    doc = parse_json(text, f"target file {path}")
     targets = doc.get("targets") if isinstance(doc, dict) else None
     if not isinstance(targets, list) or not targets:
         raise InputDataError(f"target file {path} must hold {{\"targets\": [...]}} with at "

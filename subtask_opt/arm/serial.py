@@ -42,7 +42,7 @@ import numpy as np
 
 from subtask_opt.arm.limit_arrays import freeze_limit_arrays
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.base.files import parse_json
+from subtask_opt.base.files import check_input_file, parse_json, read_text
 
 SERIAL_ROBOT_NAMES: tuple[str, ...] = ("ur3", "ur5", "ur10", "panda", "vs060_drill")
 
@@ -287,10 +287,7 @@ def _check_urdf_limits(urdf: Path, locked: Mapping[str, float]) -> None:
 
 
 def _read_json(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read robot parameter file {path}: {exc}") from None
+    text = read_text(path, "robot parameter file", max_bytes=1 << 20)
     params = parse_json(text, f"robot parameter file {path}")  # depth-limited
     if not isinstance(params, dict):
         raise InputDataError(f"robot parameter file {path} must hold a JSON object")
@@ -371,8 +368,7 @@ def load_serial_arm(name_or_urdf: str | Path, *, tool_frame: str | None = None,
     else:
         raise ParameterError(f"unknown robot {text!r}: expected one of "
                              f"{', '.join(SERIAL_ROBOT_NAMES)} or a path to a .urdf file")
-    if not urdf.is_file():
-        raise InputDataError(f"URDF file not found: {urdf}")
+    check_input_file(urdf, "URDF file")  # a regular file of at most 64 MiB, never a FIFO
     params = _read_json(params_path) if params_path is not None and params_path.is_file() else {}
     _check_urdf_limits(urdf, locked)
     try:

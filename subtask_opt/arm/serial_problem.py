@@ -867,7 +867,6 @@ def serial_problem_from_files(robot: str, case: str | Path, *, scene: str | Path
     limit-set name or a JSON file of per-joint arrays (see
     :func:`~subtask_opt.arm.serial.load_serial_arm`).
     """
-    import json
 
     from subtask_opt.arm.poses import load_targets
     from subtask_opt.arm.scene import Scene
@@ -875,10 +874,10 @@ def serial_problem_from_files(robot: str, case: str | Path, *, scene: str | Path
 
     lim: Any = limits
     if isinstance(limits, (str, Path)) and str(limits).lower().endswith(".json"):
-        try:
-            lim = json.loads(Path(limits).read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise InputDataError(f"cannot read the limits file {limits}: {exc}") from None
+        from subtask_opt.base.files import parse_json, read_text
+
+        lim = parse_json(read_text(limits, "limits file", max_bytes=1 << 20),
+                         f"limits file {limits}")
     arm = load_serial_arm(robot, tool_frame=tool_frame, limits=lim)
     targets = load_targets(case, axis_step=axis_step, standoff=standoff)
     if home_deg is None:

@@ -19,7 +19,6 @@ must guard its entry point with ``if __name__ == "__main__":``.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import pickle
@@ -50,6 +49,7 @@ from subtask_opt.base.errors import (
     require_in_range,
     require_int,
 )
+from subtask_opt.base.files import parse_json, read_text
 from subtask_opt.batch.pool import map_jobs
 from subtask_opt.tour.constraints import TourConstraints
 from subtask_opt.tour.problem import MatrixProblem
@@ -599,10 +599,7 @@ def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
         if suffix != ".json":
             raise InputDataError(f"job file must be a .csv or .json subtask file or a .json "
                                  f"manifest, got {path.name!r}")
-        try:
-            data = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputDataError(f"{raw}: not valid JSON ({exc})") from None
+        data = parse_json(read_text(path, "job file"), str(raw))
         if isinstance(data, dict) and ("points" in data or "targets" in data):
             jobs.append(_file_job(raw, file_options))
             continue

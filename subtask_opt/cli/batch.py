@@ -13,6 +13,7 @@ from subtask_opt.cli._common import (
     add_stop_options,
     add_workers,
     json_output,
+    output_file,
     plot_output,
     refuse_overwriting_inputs,
     seed,
@@ -106,7 +107,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.batch import save_batch_figure
 
-        save_batch_figure(results, args.plot, title=f"batch of {len(results)} jobs on "
-                                                    f"{summary['where']}")
+        with output_file(args.plot) as tmp:
+            save_batch_figure(results, tmp, title=f"batch of {len(results)} jobs on "
+                                                  f"{summary['where']}")
         print(f"wrote {args.plot}")
     return EXIT_FAILED if failed else EXIT_OK

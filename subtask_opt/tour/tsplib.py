@@ -148,12 +148,10 @@ def read_tsplib(path: str | Path, *, max_matrix_bytes: int = MAX_MATRIX_BYTES,
         OSError: the file cannot be read.
     """
     require_int("read_tsplib", "max_file_bytes", max_file_bytes, 1)
+    from subtask_opt.base.files import read_bytes
+
     path = Path(path)
-    size = path.stat().st_size
-    if size > max_file_bytes:
-        raise InputDataError(
-            f"{path}: the file has {size} bytes, more than the limit of {max_file_bytes}")
-    raw = path.read_bytes()
+    raw = read_bytes(path, "TSPLIB file", max_bytes=max_file_bytes)  # regular files only
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
