@@ -41,6 +41,11 @@ MAX_FILE_BYTES = 32 * 1024 * 1024
 """Largest target file read (bytes); a bigger file is refused before parsing."""
 
 _MIN_NORM = 1e-9
+MIN_AXIS_STEP = 5.0
+"""The finest ``axis_step`` (degrees): at most 72 poses per tool-axis target."""
+MAX_POSES = 2_500
+"""The most tool poses of a target set (targets x 360 / axis_step for tool-axis targets):
+with up to 8 IK configurations each, at most 20,000 configurations, the solver's limit."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,7 +89,7 @@ class PoseTargets:
             arr.setflags(write=False)
             poses.append(arr)
         object.__setattr__(self, "poses", tuple(poses))
-        require_in_range("PoseTargets", "axis_step", self.axis_step, 1e-6, 360.0)
+        require_in_range("PoseTargets", "axis_step", self.axis_step, MIN_AXIS_STEP, 360.0)
         require_in_range("PoseTargets", "standoff", self.standoff, -1e3, 1e3)
 
     def __len__(self) -> int:
@@ -112,7 +117,7 @@ def axis_frame(axis: Any) -> np.ndarray:
 
 def axis_samples(axis_step: float) -> np.ndarray:
     """Rotation angles (rad) about the tool axis: 0, step, 2 step, ... below 360 degrees."""
-    require_in_range("axis_step", "axis_step", axis_step, 1e-6, 360.0)
+    require_in_range("axis_step", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     count = max(1, math.ceil(360.0 / axis_step - 1e-9))
     return np.radians(np.arange(count) * float(axis_step))
 
@@ -154,7 +159,7 @@ def quaternion_pose(point: Any, quaternion: Any, *, standoff: float = 0.0) -> np
 def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float = 0.0,
                  labels: list[str] | None = None) -> PoseTargets:
     """PoseTargets from an (n, 6) array of axis rows or an (n, 7) array of pose rows."""
-    require_in_range("make_targets", "axis_step", axis_step, 1e-6, 360.0)
+    require_in_range("make_targets", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     require_in_range("make_targets", "standoff", standoff, -1e3, 1e3)
     arr = np.asarray(rows, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] not in (6, 7):
@@ -162,6 +167,14 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
                              f"(x,y,z,qx,qy,qz,qw) numbers, got shape {arr.shape}")
     if arr.shape[0] == 0:
         raise InputDataError("no targets given")
+    # the work (IK, then legs between every two configurations) grows with the square of
+    # the poses: bounded here, before any of it starts
+    poses_in_all = arr.shape[0] * (len(axis_samples(axis_step)) if arr.shape[1] == 6 else 1)
+    if poses_in_all > MAX_POSES:
+        raise ParameterError(f"{arr.shape[0]} targets with an axis step of {axis_step:g} "
+                             f"degrees make {poses_in_all} tool poses, more than {MAX_POSES} "
+                             f"(up to 8 IK configurations each): use a coarser axis step or "
+                             "fewer targets")
     labels = labels or [f"row {i}" for i in range(arr.shape[0])]
     poses, axes, free = [], [], []
     for i, row in enumerate(arr):
@@ -260,7 +273,7 @@ def load_targets(path: str | Path, *, axis_step: float = 45.0, standoff: float =
         InputDataError: unreadable, oversize or malformed file, naming the row.
         ParameterError: ``axis_step`` outside (0, 360] or a bad ``standoff``.
     """
-    require_in_range("load_targets", "axis_step", axis_step, 1e-6, 360.0)
+    require_in_range("load_targets", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     require_in_range("load_targets", "standoff", standoff, -1e3, 1e3)
     path = Path(path)
     text = _read_text(path, max_bytes)

@@ -396,10 +396,17 @@ def load_serial_arm(name_or_urdf: str | Path, *, tool_frame: str | None = None,
 
     if tool_frame is None:
         tool_frame = params.get("tool_frame") or model.frames[len(model.frames) - 1].name
-    if not isinstance(tool_frame, str) or not model.existFrame(tool_frame):
+    if (not isinstance(tool_frame, str) or not tool_frame.isprintable()
+            or not tool_frame.encode("utf-8", "replace").decode() == tool_frame
+            or not model.existFrame(tool_frame)):
         available = [f.name for f in model.frames]
         raise InputDataError(f"robot {name!r} has no frame {tool_frame!r}; available frames: "
                              f"{', '.join(available)}")
+    if model.frames[model.getFrameId(tool_frame)].parentJoint == 0:  # e.g. "universe"
+        moving = [f.name for f in model.frames if f.parentJoint > 0]
+        raise InputDataError(f"robot {name!r}: the tool frame {tool_frame!r} is fixed to the "
+                             f"base (no joint moves it); choose a frame on the arm, e.g. "
+                             f"{', '.join(moving[-3:])}")
     if tool_offset is not None:
         offset = pin.SE3(_pose_matrix("tool_offset", tool_offset))
         parent_id = model.getFrameId(tool_frame)

@@ -31,6 +31,9 @@ MAX_JSON_DEPTH = 32
 """The deepest JSON nesting any reader accepts."""
 MAX_NUMBER_CHARS = 64
 """The longest number literal a JSON input may hold (a float needs at most ~25)."""
+MIN_FREE_BYTES = 64 * 1024
+"""An output folder with less free space than this is refused before any work starts."""
+"""The longest number literal a JSON input may hold (a float needs at most ~25)."""
 
 
 def _refuse_special(path: Path, what: str, mode: int) -> None:
@@ -90,8 +93,8 @@ def read_text(path: str | Path, what: str, *, max_bytes: int = MAX_FILE_BYTES) -
     data = read_bytes(path, what, max_bytes=max_bytes)
     nul = data.find(b"\x00")
     if nul >= 0:
-        raise InputDataError(f"{what} {path} is a binary file (a NUL byte at offset {nul}), "
-                             "not text")
+        raise InputDataError(f"{what} {path} is a binary file, not UTF-8 text (a NUL byte "
+                             f"at offset {nul})")
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -234,9 +237,14 @@ def check_output(path: str | Path, what: str = "output") -> Path:
         fd, probe = tempfile.mkstemp(dir=folder, prefix=".subtask-opt-probe-")
         os.close(fd)
         os.unlink(probe)
+        space = os.statvfs(folder)
     except OSError as exc:
         raise ParameterError(f"{what} {path}: cannot write in {folder} "
                              f"({exc.strerror or exc})") from None
+    free = space.f_bavail * space.f_frsize
+    if free < MIN_FREE_BYTES:
+        raise ParameterError(f"{what} {path}: no space left in {folder} ({free} bytes free, "
+                             f"at least {MIN_FREE_BYTES} needed)")
     return path
 
 

@@ -53,8 +53,9 @@ MAX_INDEX = 10_000_000
 """The largest subtask index ``--first``/``--end`` take."""
 
 
-def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: bool) -> None:
-    """The GA's stopping options, bounded (``--target`` too when ``target``)."""
+def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: bool) -> Any:
+    """The GA's stopping options, bounded (``--target`` too when ``target``); returns the
+    argument group (a command may add its own)."""
     stop = parser.add_argument_group(title)
     stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
                       help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
@@ -66,7 +67,8 @@ def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: boo
                            f"N in [1, {MAX_STALL}]")
     if target:
         stop.add_argument("--target", type=float_in(0.0, 1e12), metavar="SECONDS",
-                          help="stop once the total time is at most this")
+                          help="stop once the total time is at most this, in [0, 1e12]")
+    return stop
 
 
 def stop_criteria(args: argparse.Namespace) -> list[Any] | None:
@@ -323,6 +325,15 @@ def ensure_parent(path: str | Path) -> Path:
     return path
 
 
+def scheduler_address(text: str) -> str:
+    """``--scheduler``: a dask address ``PROTOCOL://HOST[:PORT]`` in printable ASCII."""
+    protocol, _, rest = text.partition("://")
+    if not (text.isascii() and text.isprintable() and protocol.isalpha() and rest.strip()):
+        raise argparse.ArgumentTypeError(f"expected a scheduler address like "
+                                         f"tcp://head:8786, got {text!r}")
+    return text
+
+
 def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs",
                 serial_default: bool = False) -> None:
     """``--scheduler ADDRESS | --workers N``: where :func:`workers_options` runs ``what``.
@@ -337,7 +348,7 @@ def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs",
         "where to run", f"{what} run on local worker processes (a Dask cluster, or a "
                         "process pool without dask) or on an existing Dask cluster")
     group = where.add_mutually_exclusive_group()
-    group.add_argument("--scheduler", metavar="ADDRESS",
+    group.add_argument("--scheduler", metavar="ADDRESS", type=scheduler_address,
                        help="address of a running dask scheduler, e.g. tcp://head:8786 "
                             "(needs pip install subtask_opt[cluster])")
     default = "0" if serial_default else "the machine's cores"

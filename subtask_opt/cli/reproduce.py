@@ -45,6 +45,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.paper not in PAPERS:
         raise ParameterError(f"PAPER must be one of {', '.join(PAPERS)}, got {args.paper!r}")
+    if args.paper != "004" and (args.scheduler is not None or args.workers):
+        given = "--scheduler" if args.scheduler is not None else "--workers"
+        raise ParameterError(f"{given} applies to paper 004's suite only; paper {args.paper} "
+                             "runs in this process")
     where = workers_options(args)
     map_runs = None
     if where["scheduler"] is not None or where["workers"]:

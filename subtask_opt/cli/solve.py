@@ -431,9 +431,10 @@ def add_cell_options(g: Any) -> None:
                         '"rotation"}]}')
     g.add_argument("--standoff", type=float_in(-1.0, 1.0), default=None, metavar="M",
                    help="tool standoff along its axis in metres (default 0)")
-    g.add_argument("--axis-step", type=float_in(0.0, 360.0, open_low=True), default=None,
-                   metavar="DEG", help="sampling step of the free rotation about a tool axis "
-                                       "(default 45)")
+    g.add_argument("--axis-step", type=float_in(5.0, 360.0), default=None,
+                   metavar="DEG", help="sampling step of the free rotation about a tool axis, "
+                                       "in [5, 360] (default 45); targets x 360 / DEG may be "
+                                       "at most 2500 poses")
     g.add_argument("--tool-frame", metavar="FRAME", help="tool frame (default: the robot's)")
 
 

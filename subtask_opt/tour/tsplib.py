@@ -192,6 +192,12 @@ class _Parser:
 
     # -- driver
     def parse(self, default_name: str) -> TspInstance:
+        for number, raw in enumerate(self.lines, start=1):  # Arabic-Indic digits and the
+            # like would pass int() and float(); only names and comments may be Unicode
+            if not raw.isascii() and not raw.lstrip().upper().startswith(("NAME", "COMMENT")):
+                bad = next(c for c in raw if not c.isascii())
+                raise self.error(number, f"a non-ASCII character {bad!a} outside NAME and "
+                                         "COMMENT")
         while self.pos < len(self.lines):
             number = self.pos + 1
             line = self.lines[self.pos].strip()
