@@ -48,7 +48,7 @@ from subtask_opt.base.errors import (
     require_in_range,
     require_int,
 )
-from subtask_opt.base.files import parse_json, read_text
+from subtask_opt.base.files import check_input_file, parse_json, read_text
 from subtask_opt.batch.pool import map_jobs
 from subtask_opt.tour.constraints import TourConstraints
 from subtask_opt.tour.problem import MatrixProblem
@@ -612,8 +612,7 @@ def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
     jobs: list[Job] = []
     for raw in paths:
         path = Path(raw)
-        if not path.is_file():
-            raise InputDataError(f"job file not found: {raw}")
+        check_input_file(path, "job file")  # a regular file: never a FIFO or a device
         suffix = path.suffix.lower()
         if suffix == ".csv":
             jobs.append(_file_job(raw, file_options))

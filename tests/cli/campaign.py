@@ -774,7 +774,7 @@ def run_attempt(attempt: Attempt, fx: Fixtures, *, time_cap: float = TIME_CAP_S,
     lines = [ln for ln in outcome.stderr.splitlines() if ln.strip()]
     if "Traceback" in outcome.stderr or outcome.code in (97,):
         outcome.problems.append("tracebacks")
-    elif outcome.code == 0:
+    elif outcome.code == 0 and 0 not in attempt.ok_codes:
         outcome.problems.append("silent accepts")
     elif outcome.code is not None and outcome.code not in attempt.ok_codes:
         outcome.problems.append("wrong exits")
