@@ -12,6 +12,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 import subprocess
@@ -212,7 +213,7 @@ def test_batch_cli_with_a_slow_and_a_bad_job_reports_all_and_exits_1(arm, tmp_pa
     # 1,500 reachable subtasks: the search alone runs for minutes, the limit stops it
     radii, angles = np.linspace(0.3, 0.55, 30), np.linspace(-1.5, 1.5, 50)
     (tmp_path / "slow.csv").write_text("x,y\n" + "".join(
-        f"{r * np.cos(a)!r},{r * np.sin(a)!r}\n" for r in radii.tolist()
+        f"{r * math.cos(a)!r},{r * math.sin(a)!r}\n" for r in radii.tolist()
         for a in angles.tolist()))
     out = tmp_path / "out.json"
     argv = ["batch", *(str(tmp_path / f) for f in ("good0.csv", "slow.csv", "bad.csv",

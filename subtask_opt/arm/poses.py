@@ -219,8 +219,9 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
         if len(row) != len(header):
             raise InputDataError(f"{label} has {len(row)} columns, expected {len(header)} "
                                  f"({','.join(header)})")
-        try:
-            nums = [float(cell) for cell in row]
+        try:  # ASCII only: float() reads Arabic-Indic and full-width digits too
+            nums = [float(cell) if cell.isascii() and len(cell) <= 64 else float("x")
+                    for cell in row]
         except ValueError:
             raise InputDataError(f"{label} is not all numbers: {row}") from None
         if not all(math.isfinite(v) for v in nums):

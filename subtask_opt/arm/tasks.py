@@ -131,7 +131,7 @@ def _close_pair(pts: np.ndarray, tol: float) -> tuple[int, int] | None:
 
 def _number(text: str, path: Path, line: int, column: str) -> float:
     try:
-        if len(text) > 64:
+        if len(text) > 64 or not text.isascii():  # float() reads Arabic-Indic digits too
             raise ValueError
         return float(text)
     except ValueError:

@@ -535,6 +535,9 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
     """
     if isinstance(problems, (Job, PlanarProblem, MatrixProblem)):
         problems = [problems]
+    if isinstance(problems, (str, bytes, dict)) or not isinstance(problems, Iterable):
+        raise ParameterError(f"solve_many.problems must be a list of Jobs or problems, got "
+                             f"{type(problems).__name__}")
     problems = list(problems)
     if stop is not None:
         from subtask_opt.base.stop import as_criteria

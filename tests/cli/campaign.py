@@ -363,6 +363,7 @@ def malformed(kind: str, rng: random.Random) -> list[tuple[str, str | bytes]]:
              "....\n"),
             ("content: 5000-digit size", f"type octile\nheight {digits}\nwidth 4\nmap\n....\n"),
             ("content: ragged map", "type octile\nheight 3\nwidth 4\nmap\n....\n..\n"),
+            ("content: non-ASCII digits", "type octile\nheight \u0662\nwidth 2\nmap\n..\n..\n"),
         ]
     return out
 

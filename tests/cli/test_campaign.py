@@ -129,3 +129,25 @@ def test_read_text_refuses_binary_and_reads_at_most_the_limit(tmp_path):
         fh.truncate(1 << 30)  # sparse: the size check refuses it before any read
     with pytest.raises(InputDataError, match="limit"):
         read_text(big, "subtask file", max_bytes=1 << 20)
+
+
+@pytest.mark.parametrize("digit", ["\u0663", "\u00b3", "\uff13", "\U0001d7db"])
+def test_non_ascii_digits_are_not_numbers_in_any_reader(tmp_path, digit):
+    from subtask_opt.arm.poses import load_targets
+    from subtask_opt.arm.tasks import load_subtasks
+    from subtask_opt.planners.grid.world import GridWorld
+    from subtask_opt.tour.tsplib import parse_tsplib
+
+    (tmp_path / "s.csv").write_text(f"x,y\n0.3,{digit}\n", encoding="utf-8")
+    with pytest.raises(InputDataError, match="line 2"):
+        load_subtasks(tmp_path / "s.csv")
+    (tmp_path / "t.csv").write_text(f"x,y,z,dx,dy,dz\n0.4,0,0.2,1,0,{digit}\n",
+                                    encoding="utf-8")
+    with pytest.raises(InputDataError, match="row 1"):
+        load_targets(tmp_path / "t.csv")
+    with pytest.raises(InputDataError, match="line 3"):
+        parse_tsplib(f"NAME: x\nTYPE: TSP\nDIMENSION: {digit}\nEOF\n")
+    (tmp_path / "m.map").write_text(f"type octile\nheight {digit}\nwidth 2\nmap\n..\n..\n",
+                                    encoding="utf-8")
+    with pytest.raises(InputDataError, match="height"):
+        GridWorld.from_movingai(tmp_path / "m.map")

@@ -295,6 +295,8 @@ def _movingai_occupancy(text: str, source: str) -> np.ndarray:
     if i == len(lines):
         raise InputDataError(f"{source}: no 'map' line found")
     try:
+        if not (header["height"].isascii() and header["width"].isascii()):
+            raise ValueError  # int() reads Arabic-Indic digits too
         height, width = int(header["height"]), int(header["width"])
     except (KeyError, ValueError):
         shown = {k: v[:20] for k, v in list(header.items())[:4]}
