@@ -156,6 +156,20 @@ def quaternion_pose(point: Any, quaternion: Any, *, standoff: float = 0.0) -> np
     return pose
 
 
+def _refuse_duplicates(arr: np.ndarray, labels: list[str]) -> None:
+    """Two targets with the same position and direction (within 1e-12) are one target
+    given twice, as the planar reader refuses two subtasks at one point."""
+    if not np.all(np.isfinite(arr)):
+        return  # reported row by row below
+    _, first, inverse = np.unique(np.round(arr, 12), axis=0, return_index=True,
+                                  return_inverse=True)
+    inverse = np.asarray(inverse).reshape(-1)
+    for i, group in enumerate(inverse):
+        if first[group] != i:
+            raise InputDataError(f"target {labels[i]} repeats target {labels[first[group]]} "
+                                 "(same position and direction): give each target once")
+
+
 def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float = 0.0,
                  labels: list[str] | None = None) -> PoseTargets:
     """PoseTargets from an (n, 6) array of axis rows or an (n, 7) array of pose rows."""
@@ -167,6 +181,7 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
                              f"(x,y,z,qx,qy,qz,qw) numbers, got shape {arr.shape}")
     if arr.shape[0] == 0:
         raise InputDataError("no targets given")
+    _refuse_duplicates(arr, labels or [f"row {i}" for i in range(arr.shape[0])])
     # the work (IK, then legs between every two configurations) grows with the square of
     # the poses: bounded here, before any of it starts
     poses_in_all = arr.shape[0] * (len(axis_samples(axis_step)) if arr.shape[1] == 6 else 1)

@@ -890,8 +890,10 @@ def main(argv: list[str] | None = None) -> int:
     started = time.monotonic()
     with fixtures() as fx:
         attempts = generate(fx, args.attempts, args.seed)
-        if args.only:
-            attempts = [a for a in attempts if args.only in a.label or args.only in a.klass]
+        if args.only:  # comma-separated: attempts whose label or class has one of them
+            words = args.only.split(",")
+            attempts = [a for a in attempts if any(w in a.label or w in a.klass
+                                                   for w in words)]
         outcomes = run(attempts, fx, time_cap=args.time_cap, memory=args.memory,
                        progress=True)
     print(table(outcomes))
