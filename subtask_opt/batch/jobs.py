@@ -361,6 +361,9 @@ SERIAL_WARM_TARGETS = "x,y,z,dx,dy,dz\n0.45,-0.15,0.20,1,0,-0.3\n0.45,0.05,0.20,
 """Three UR5 holes: the warm-up of a batch with serial arms."""
 
 _WARMED: set[tuple[tuple[str, str], ...]] = set()
+WARM_SUBTASKS = 20
+"""Subtasks of the warm-up problems: with 5, some operators that larger jobs call were left
+for the first job to compile (29 s, in every worker), measured by benchmarks/cold_batch.py."""
 
 
 def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> None:
@@ -377,7 +380,7 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
     from subtask_opt.base.stop import MaxGenerations
 
     arm = load_planar_arm("planar_2r")
-    subtasks = random_subtasks(arm, 5, seed=0)
+    subtasks = random_subtasks(arm, WARM_SUBTASKS, seed=0)
     for time_model, mode in kinds:
         try:
             if time_model == "serial":
