@@ -2,8 +2,9 @@
 #   make demo   - create .venv, install, solve the built-in 30-subtask case, write figures
 #   make test   - create .venv with the dev extras if needed, run all tests and notebooks
 # More: make lint (ruff + mypy), make coverage (kernels as Python), make fuzz (long
-# fuzzing), make bench (benchmarks, peers included), make papers (reproduce the five source
-# papers: figures and tables in out/papers), make clean (also the kernel cache).
+# fuzzing), make campaign (the bad-input table), make bench (benchmarks, peers included),
+# make papers (reproduce the five source papers: figures and tables in out/papers),
+# make clean (also the kernel cache).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -11,7 +12,7 @@ OUT := out
 FUZZ_EXAMPLES ?= 200
 PAPER_WORKERS ?= 2
 
-.PHONY: demo test bench papers lint coverage fuzz clean
+.PHONY: demo test bench papers lint coverage fuzz campaign clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -81,6 +82,13 @@ coverage: $(VENV)/.installed-dev
 fuzz: $(VENV)/.installed-dev
 	FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) FUZZ_REPORT=$(OUT)/fuzz/report.json MPLBACKEND=Agg \
 		$(BIN)/python -m pytest -n 2 -m fuzz tests
+
+# make campaign: the bad-input campaign (tests/cli/campaign.py): every command x option family
+# and the public API given bad values, each in a child with RLIMIT_AS 3 GiB and a 30 s cap;
+# prints attempts, tracebacks, hangs, crashes, wrong exits, silent accepts (all must be 0)
+campaign: $(VENV)/.installed-dev
+	MPLBACKEND=Agg $(BIN)/python -m tests.cli.campaign --attempts 3000 \
+		--json $(OUT)/campaign.json
 
 clean:
 	-[ -x $(BIN)/python ] && $(BIN)/python -m subtask_opt._kernel_cache --clear

@@ -85,14 +85,23 @@ def mark_warm(group: str) -> None:
 _announced = False
 
 
+COMPILE_TIME_TEXT = ("about 1 minute for a planar arm's solve or batch and 1-2 more for a "
+                     "serial arm's on 2 free cores, several times that when they are busy")
+"""What a cold compile costs on the project's machine class (2 cores; measured in
+CONTRIBUTING, "Numba's cache and the cold start"), said in the notice."""
+
+
 def _announce(what: str) -> None:
     """Say once per process, on stderr (also into logs and pipes: the wait that
-    follows can be a minute), that numba is compiling."""
+    follows is minutes), that numba is compiling, how long that takes, and where it
+    is kept."""
     global _announced
     if not _announced:
         _announced = True
-        print(f"subtask-opt: compiling {what} (numba; up to a minute, once: cached "
-              f"afterwards in {CACHE_DIR})", file=sys.stderr, flush=True)
+        where = (f"cached afterwards in {CACHE_DIR}" if _PRIVATE is None else
+                 "not cached: the cache folder cannot be written")
+        print(f"subtask-opt: compiling {what} (numba, once: {COMPILE_TIME_TEXT}; {where})",
+              file=sys.stderr, flush=True)
 
 
 class _PackageCompiles(event.Listener):
@@ -195,17 +204,70 @@ def clear() -> Path:
     return root
 
 
-def _activate() -> Path:
-    folder = cache_dir()
+MIN_FREE_BYTES = 16 << 20
+"""A cache folder with less free space is treated as unwritable (a kernel file is ~1 MiB)."""
+
+
+def _writable(folder: Path) -> str | None:
+    """Why nothing can be cached in ``folder`` (None: it can)."""
+    import tempfile
+
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        folder.touch()  # mark it in use
-        for old in folder.parent.glob(f"{_PREFIX}*"):
-            # another checkout or process may still use a recent one: remove only old ones
-            if old != folder and time.time() - old.stat().st_mtime > STALE_AFTER_S:
-                shutil.rmtree(old, ignore_errors=True)
-    except OSError:  # unwritable: numba falls back to compiling in memory
-        pass
+        fd, probe = tempfile.mkstemp(dir=folder, prefix=".probe-")
+        os.close(fd)
+        os.unlink(probe)
+        space = os.statvfs(folder)
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    if space.f_bavail * space.f_frsize < MIN_FREE_BYTES:
+        return f"{space.f_bavail * space.f_frsize} bytes free"
+    return None
+
+
+_PRIVATE: Path | None = None
+"""The temporary cache folder used when the real one cannot be written (else None)."""
+
+
+def _private_folder() -> Path:
+    """A temporary cache folder of this process alone, removed at exit."""
+    import atexit
+    import tempfile
+
+    global _PRIVATE
+    folder = Path(tempfile.mkdtemp(prefix="subtask_opt-kernels-"))
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    _PRIVATE = folder
+    return folder
+
+
+def _activate() -> Path:
+    """Point numba at this source tree's cache folder.
+
+    A folder that cannot be written (read-only, full, not creatable) would make numba
+    fall back to ``__pycache__`` beside the sources, where the source hash no longer
+    guards it; instead this process compiles into a private temporary folder (removed at
+    exit), after one warning line on stderr.
+    """
+    folder = cache_dir()
+    why = _writable(folder)
+    if why is None:
+        try:
+            folder.touch()  # mark it in use
+            for old in folder.parent.glob(f"{_PREFIX}*"):
+                # another checkout or process may still use a recent one: remove only old ones
+                if old != folder and time.time() - old.stat().st_mtime > STALE_AFTER_S:
+                    shutil.rmtree(old, ignore_errors=True)
+        except OSError:
+            pass
+    else:
+        try:
+            private = _private_folder()
+        except OSError:  # nowhere to write at all: numba compiles in memory
+            private = folder
+        print(f"subtask-opt: warning: cannot use the kernel cache {folder} ({why}); "
+              "compiling in memory for this run only", file=sys.stderr, flush=True)
+        folder = private
     numba.config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]
     return folder
 

@@ -30,6 +30,13 @@ ALLOWED = {
     ("batch/jobs.py", "import pickle"),
     ("batch/jobs.py", "pickle.dumps"),
     ("batch/jobs.py", "pickle.loads"),
+    # map_jobs(isolate=True): a job's outcome comes back from the process forked for it
+    # through an anonymous pipe this process created (os.pipe before os.fork): the bytes are
+    # our own child's, as multiprocessing's own result pickles are (checked by
+    # test_the_pool_unpickles_only_its_childs_pipe).
+    ("batch/pool.py", "import pickle"),
+    ("batch/pool.py", "pickle.dumps"),
+    ("batch/pool.py", "pickle.loads"),
 }
 
 
@@ -115,6 +122,23 @@ def test_the_pickle_exception_is_only_our_bytes() -> None:
     assert not [t for n in ast.walk(tree) if isinstance(n, (ast.Assign, ast.AnnAssign))
                 for t in (n.targets if isinstance(n, ast.Assign) else [n.target])
                 if isinstance(t, ast.Attribute) and t.attr == "problem"]
+
+
+def test_the_pool_unpickles_only_its_childs_pipe() -> None:
+    """``pickle.loads`` in batch/pool.py reads only what ``os.read`` returned from the read
+    end of the pipe made right before ``os.fork`` in the same function."""
+    tree = ast.parse((PACKAGE / "batch" / "pool.py").read_text(encoding="utf-8"))
+    loads = [n for n in ast.walk(tree) if isinstance(n, ast.Call)
+             and ast.unparse(n.func) == "pickle.loads"]
+    assert [ast.unparse(n.args[0]) for n in loads] == ["b''.join(chunks)"]
+    fn = next(n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)
+              and n.name == "_run_forked")
+    text = ast.unparse(fn)
+    assert text.index("os.pipe()") < text.index("os.fork()") < text.index("pickle.loads")
+    appends = [n for n in ast.walk(fn) if isinstance(n, ast.Call)
+               and ast.unparse(n.func) == "chunks.append"]
+    assert [ast.unparse(n.args[0]) for n in appends] == ["block"]
+    assert "block = os.read(read_fd, 1 << 20)" in text
 
 
 @pytest.mark.parametrize("snippet,what", [

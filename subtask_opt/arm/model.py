@@ -37,7 +37,7 @@ from subtask_opt.base.errors import (
     UnreachableError,
     require_in_range,
 )
-from subtask_opt.base.files import parse_json, quiet_stderr, read_text
+from subtask_opt.base.files import check_input_file, parse_json, quiet_stderr, read_text
 
 ROBOT_NAMES: tuple[str, ...] = ("planar_2r", "asr_twodof")
 BRANCH_NAMES: tuple[str, str] = ("elbow-down", "elbow-up")
@@ -357,8 +357,7 @@ def load_planar_arm(name_or_path: str | Path = "planar_2r", *,
         raise ParameterError(
             f"unknown robot {text!r}: expected one of {', '.join(ROBOT_NAMES)} or a path to a "
             f".urdf file")
-    if not urdf.is_file():
-        raise InputDataError(f"URDF file not found: {urdf}")
+    check_input_file(urdf, "URDF file")  # a regular file of at most 64 MiB, never a FIFO
     params = _read_params(params_path) if params_path is not None else {}
     try:
         with quiet_stderr():  # the URDF parser prints its own 'Error:' lines; ours follows

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -34,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
-from subtask_opt.base.files import MAX_JSON_DEPTH, json_depth
+from subtask_opt.base.files import parse_json
 
 AXIS_COLUMNS: tuple[str, ...] = ("x", "y", "z", "dx", "dy", "dz")
 POSE_COLUMNS: tuple[str, ...] = ("x", "y", "z", "qx", "qy", "qz", "qw")
@@ -42,6 +41,11 @@ MAX_FILE_BYTES = 32 * 1024 * 1024
 """Largest target file read (bytes); a bigger file is refused before parsing."""
 
 _MIN_NORM = 1e-9
+MIN_AXIS_STEP = 5.0
+"""The finest ``axis_step`` (degrees): at most 72 poses per tool-axis target."""
+MAX_POSES = 2_500
+"""The most tool poses of a target set (targets x 360 / axis_step for tool-axis targets):
+with up to 8 IK configurations each, at most 20,000 configurations, the solver's limit."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +89,7 @@ class PoseTargets:
             arr.setflags(write=False)
             poses.append(arr)
         object.__setattr__(self, "poses", tuple(poses))
-        require_in_range("PoseTargets", "axis_step", self.axis_step, 1e-6, 360.0)
+        require_in_range("PoseTargets", "axis_step", self.axis_step, MIN_AXIS_STEP, 360.0)
         require_in_range("PoseTargets", "standoff", self.standoff, -1e3, 1e3)
 
     def __len__(self) -> int:
@@ -113,7 +117,7 @@ def axis_frame(axis: Any) -> np.ndarray:
 
 def axis_samples(axis_step: float) -> np.ndarray:
     """Rotation angles (rad) about the tool axis: 0, step, 2 step, ... below 360 degrees."""
-    require_in_range("axis_step", "axis_step", axis_step, 1e-6, 360.0)
+    require_in_range("axis_step", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     count = max(1, math.ceil(360.0 / axis_step - 1e-9))
     return np.radians(np.arange(count) * float(axis_step))
 
@@ -152,10 +156,24 @@ def quaternion_pose(point: Any, quaternion: Any, *, standoff: float = 0.0) -> np
     return pose
 
 
+def _refuse_duplicates(arr: np.ndarray, labels: list[str]) -> None:
+    """Two targets with the same position and direction (within 1e-12) are one target
+    given twice, as the planar reader refuses two subtasks at one point."""
+    if not np.all(np.isfinite(arr)):
+        return  # reported row by row below
+    _, first, inverse = np.unique(np.round(arr, 12), axis=0, return_index=True,
+                                  return_inverse=True)
+    inverse = np.asarray(inverse).reshape(-1)
+    for i, group in enumerate(inverse):
+        if first[group] != i:
+            raise InputDataError(f"target {labels[i]} repeats target {labels[first[group]]} "
+                                 "(same position and direction): give each target once")
+
+
 def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float = 0.0,
                  labels: list[str] | None = None) -> PoseTargets:
     """PoseTargets from an (n, 6) array of axis rows or an (n, 7) array of pose rows."""
-    require_in_range("make_targets", "axis_step", axis_step, 1e-6, 360.0)
+    require_in_range("make_targets", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     require_in_range("make_targets", "standoff", standoff, -1e3, 1e3)
     arr = np.asarray(rows, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[1] not in (6, 7):
@@ -163,6 +181,15 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
                              f"(x,y,z,qx,qy,qz,qw) numbers, got shape {arr.shape}")
     if arr.shape[0] == 0:
         raise InputDataError("no targets given")
+    _refuse_duplicates(arr, labels or [f"row {i}" for i in range(arr.shape[0])])
+    # the work (IK, then legs between every two configurations) grows with the square of
+    # the poses: bounded here, before any of it starts
+    poses_in_all = arr.shape[0] * (len(axis_samples(axis_step)) if arr.shape[1] == 6 else 1)
+    if poses_in_all > MAX_POSES:
+        raise ParameterError(f"{arr.shape[0]} targets with an axis step of {axis_step:g} "
+                             f"degrees make {poses_in_all} tool poses, more than {MAX_POSES} "
+                             f"(up to 8 IK configurations each): use a coarser axis step or "
+                             "fewer targets")
     labels = labels or [f"row {i}" for i in range(arr.shape[0])]
     poses, axes, free = [], [], []
     for i, row in enumerate(arr):
@@ -184,22 +211,17 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
 
 
 def _read_text(path: Path, max_bytes: int) -> str:
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise InputDataError(f"cannot read target file {path}: {exc}") from None
-    if size > max_bytes:
-        raise InputDataError(f"target file {path} is {size} bytes, more than the "
-                             f"{max_bytes} allowed (max_bytes)")
-    try:
-        return path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read target file {path}: {exc}") from None
+    from subtask_opt.base.files import read_text
+
+    return read_text(path, "target file", max_bytes=max_bytes)  # regular files only
 
 
 def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
     reader = csv.reader(io.StringIO(text))
-    rows = [r for r in reader if any(cell.strip() for cell in r)]
+    try:
+        rows = [r for r in reader if any(cell.strip() for cell in r)]
+    except csv.Error as exc:  # e.g. a field over the csv module's limit (an open quote)
+        raise InputDataError(f"target file {path}, line {reader.line_num}: {exc}") from None
     if not rows:
         raise InputDataError(f"target file {path} is empty")
     header = tuple(cell.strip().lower() for cell in rows[0])
@@ -212,8 +234,9 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
         if len(row) != len(header):
             raise InputDataError(f"{label} has {len(row)} columns, expected {len(header)} "
                                  f"({','.join(header)})")
-        try:
-            nums = [float(cell) for cell in row]
+        try:  # ASCII only: float() reads Arabic-Indic and full-width digits too
+            nums = [float(cell) if cell.isascii() and len(cell) <= 64 else float("x")
+                    for cell in row]
         except ValueError:
             raise InputDataError(f"{label} is not all numbers: {row}") from None
         if not all(math.isfinite(v) for v in nums):
@@ -226,15 +249,8 @@ def _parse_csv(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
 
 
 def _parse_json(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
-    depth = json_depth(text)  # checked before parsing: no RecursionError
-    if depth > MAX_JSON_DEPTH:
-        raise InputDataError(f"target file {path}: brackets nested {depth} deep, deeper than "
-                             f"the limit of {MAX_JSON_DEPTH}")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputDataError(f"target file {path} is not valid JSON (line {exc.lineno}: "
-                             f"{exc.msg})") from None
+    # depth-, number- and surrogate-checked: no RecursionError, no 5,000-digit number
+    doc = parse_json(text, f"target file {path}")
     targets = doc.get("targets") if isinstance(doc, dict) else None
     if not isinstance(targets, list) or not targets:
         raise InputDataError(f"target file {path} must hold {{\"targets\": [...]}} with at "
@@ -273,7 +289,7 @@ def load_targets(path: str | Path, *, axis_step: float = 45.0, standoff: float =
         InputDataError: unreadable, oversize or malformed file, naming the row.
         ParameterError: ``axis_step`` outside (0, 360] or a bad ``standoff``.
     """
-    require_in_range("load_targets", "axis_step", axis_step, 1e-6, 360.0)
+    require_in_range("load_targets", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     require_in_range("load_targets", "standoff", standoff, -1e3, 1e3)
     path = Path(path)
     text = _read_text(path, max_bytes)

@@ -148,9 +148,12 @@ def movable_joints(urdf: str | Path) -> int:
     """Number of revolute/prismatic/continuous joints of a URDF (-1 if unreadable)."""
     import xml.etree.ElementTree as ET
 
+    from subtask_opt.base.files import check_input_file
+
     try:
+        check_input_file(urdf, "URDF file")  # never parse a FIFO or a device: -1, reported later
         root = ET.parse(str(urdf)).getroot()
-    except (OSError, ET.ParseError):
+    except (OSError, ET.ParseError, InputDataError):
         return -1
     return sum(j.get("type") in ("revolute", "prismatic", "continuous")
                for j in root.iter("joint"))

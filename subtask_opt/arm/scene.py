@@ -43,7 +43,7 @@ import numpy as np
 
 from subtask_opt.arm.serial import SerialArm
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
-from subtask_opt.base.files import parse_json
+from subtask_opt.base.files import parse_json, read_text
 
 MAX_SCENE_BYTES = 8 * 1024 * 1024
 _ROT_TOL = 1e-6
@@ -167,14 +167,7 @@ class Scene:
     def load(cls, path: str | Path) -> Scene:
         """Read a scene JSON file (UTF-8, BOM accepted, at most 8 MiB)."""
         path = Path(path)
-        try:
-            size = path.stat().st_size
-            if size > MAX_SCENE_BYTES:
-                raise InputDataError(f"scene file {path} is {size} bytes, more than "
-                                     f"{MAX_SCENE_BYTES} allowed")
-            text = path.read_text(encoding="utf-8-sig")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputDataError(f"cannot read scene file {path}: {exc}") from None
+        text = read_text(path, "scene file", max_bytes=MAX_SCENE_BYTES)  # regular files only
         doc = parse_json(text, f"scene file {path}")  # depth-limited: no RecursionError
         return cls.from_dict(doc, source=f"scene file {path.name}")
 

@@ -42,7 +42,7 @@ import numpy as np
 
 from subtask_opt.arm.limit_arrays import freeze_limit_arrays
 from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.base.files import parse_json
+from subtask_opt.base.files import check_input_file, parse_json, read_text
 
 SERIAL_ROBOT_NAMES: tuple[str, ...] = ("ur3", "ur5", "ur10", "panda", "vs060_drill")
 
@@ -287,10 +287,7 @@ def _check_urdf_limits(urdf: Path, locked: Mapping[str, float]) -> None:
 
 
 def _read_json(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputDataError(f"cannot read robot parameter file {path}: {exc}") from None
+    text = read_text(path, "robot parameter file", max_bytes=1 << 20)
     params = parse_json(text, f"robot parameter file {path}")  # depth-limited
     if not isinstance(params, dict):
         raise InputDataError(f"robot parameter file {path} must hold a JSON object")
@@ -377,8 +374,7 @@ def load_serial_arm(name_or_urdf: str | Path, *, tool_frame: str | None = None,
     else:
         raise ParameterError(f"unknown robot {text!r}: expected one of "
                              f"{', '.join(SERIAL_ROBOT_NAMES)} or a path to a .urdf file")
-    if not urdf.is_file():
-        raise InputDataError(f"URDF file not found: {urdf}")
+    check_input_file(urdf, "URDF file")  # a regular file of at most 64 MiB, never a FIFO
     params = _read_json(params_path) if params_path is not None and params_path.is_file() else {}
     _check_urdf_limits(urdf, locked)
     try:
@@ -406,10 +402,17 @@ def load_serial_arm(name_or_urdf: str | Path, *, tool_frame: str | None = None,
 
     if tool_frame is None:
         tool_frame = params.get("tool_frame") or model.frames[len(model.frames) - 1].name
-    if not isinstance(tool_frame, str) or not model.existFrame(tool_frame):
+    if (not isinstance(tool_frame, str) or not tool_frame.isprintable()
+            or not tool_frame.encode("utf-8", "replace").decode() == tool_frame
+            or not model.existFrame(tool_frame)):
         available = [f.name for f in model.frames]
         raise InputDataError(f"robot {name!r} has no frame {tool_frame!r}; available frames: "
                              f"{', '.join(available)}")
+    if model.frames[model.getFrameId(tool_frame)].parentJoint == 0:  # e.g. "universe"
+        moving = [f.name for f in model.frames if f.parentJoint > 0]
+        raise InputDataError(f"robot {name!r}: the tool frame {tool_frame!r} is fixed to the "
+                             f"base (no joint moves it); choose a frame on the arm, e.g. "
+                             f"{', '.join(moving[-3:])}")
     if tool_offset is not None:
         offset = pin.SE3(_pose_matrix("tool_offset", tool_offset))
         parent_id = model.getFrameId(tool_frame)

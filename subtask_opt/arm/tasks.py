@@ -131,7 +131,7 @@ def _close_pair(pts: np.ndarray, tol: float) -> tuple[int, int] | None:
 
 def _number(text: str, path: Path, line: int, column: str) -> float:
     try:
-        if len(text) > 64:
+        if len(text) > 64 or not text.isascii():  # float() reads Arabic-Indic digits too
             raise ValueError
         return float(text)
     except ValueError:
@@ -145,8 +145,12 @@ def _load_csv(path: Path, text: str) -> SubtaskSet:
     if long is not None:
         raise InputDataError(f"{path}, line {long}: longer than 1000 characters "
                              "(expected x,y[,theta] numbers)")
-    rows = [(n, row) for n, row in enumerate(csv.reader(lines), start=1)
-            if row and any(cell.strip() for cell in row)]
+    reader = csv.reader(lines)
+    try:
+        rows = [(n, row) for n, row in enumerate(reader, start=1)
+                if row and any(cell.strip() for cell in row)]
+    except csv.Error as exc:  # e.g. a field over the csv module's limit (an open quote)
+        raise InputDataError(f"{path}, line {reader.line_num}: {exc}") from None
     if not rows:
         raise InputDataError(f"{path} is empty: expected a header x,y[,theta] and rows")
     line, header = rows[0]

@@ -19,9 +19,7 @@ must guard its entry point with ``if __name__ == "__main__":``.
 
 from __future__ import annotations
 
-import json
 import math
-import os
 import pickle
 import socket
 import time
@@ -50,6 +48,7 @@ from subtask_opt.base.errors import (
     require_in_range,
     require_int,
 )
+from subtask_opt.base.files import check_input_file, parse_json, read_text
 from subtask_opt.batch.pool import map_jobs
 from subtask_opt.tour.constraints import TourConstraints
 from subtask_opt.tour.problem import MatrixProblem
@@ -152,7 +151,7 @@ class Job:
                                      f"{self.home!r}")
             object.__setattr__(self, "home", home)
         require_in_range("Job", "standoff", self.standoff, -1.0, 1.0)
-        require_in_range("Job", "axis_step", self.axis_step, 1e-6, 360.0)
+        require_in_range("Job", "axis_step", self.axis_step, 5.0, 360.0)
         for name in ("scene", "tool_frame"):
             value = getattr(self, name)
             if value is not None and (not isinstance(value, str) or not value.strip()):
@@ -300,7 +299,9 @@ def _pickle_problem(problem: PlanarProblem | MatrixProblem) -> bytes:
 
 
 def _worker_name() -> str:
-    return f"{socket.gethostname()}:{os.getpid()}"
+    from subtask_opt.batch.pool import worker_pid
+
+    return f"{socket.gethostname()}:{worker_pid()}"
 
 
 def _error_text(exc: BaseException) -> str:
@@ -360,6 +361,9 @@ SERIAL_WARM_TARGETS = "x,y,z,dx,dy,dz\n0.45,-0.15,0.20,1,0,-0.3\n0.45,0.05,0.20,
 """Three UR5 holes: the warm-up of a batch with serial arms."""
 
 _WARMED: set[tuple[tuple[str, str], ...]] = set()
+WARM_SUBTASKS = 20
+"""Subtasks of the warm-up problems: with 5, some operators that larger jobs call were left
+for the first job to compile (29 s, in every worker), measured by benchmarks/cold_batch.py."""
 
 
 def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> None:
@@ -376,7 +380,7 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
     from subtask_opt.base.stop import MaxGenerations
 
     arm = load_planar_arm("planar_2r")
-    subtasks = random_subtasks(arm, 5, seed=0)
+    subtasks = random_subtasks(arm, WARM_SUBTASKS, seed=0)
     for time_model, mode in kinds:
         try:
             if time_model == "serial":
@@ -488,7 +492,9 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
                stop: StoppingCriterion | list[StoppingCriterion] | None = None,
                client: Any = None, workers: int | None = None, progress: bool = False,
                params: SolverParams | None = None,
-               on_result: Callable[[JobResult], None] | None = None) -> list[JobResult]:
+               on_result: Callable[[JobResult], None] | None = None,
+               job_time_limit: float | None = None,
+               isolate: bool = True) -> list[JobResult]:
     """Solve many sequencing jobs in parallel; one :class:`JobResult` per item, in input order.
 
     Each item is solved exactly as :func:`subtask_opt.solve` would solve it on
@@ -513,9 +519,17 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
         params: solver parameters of every job.
         on_result: called with each JobResult as soon as it finishes
             (completion order; jobs whose file could not be read come first).
+        job_time_limit: seconds one job may run (its whole job: reading, building,
+            search) before it is stopped and fails with its reason; None: no limit.
+            At most :data:`~subtask_opt.batch.pool.MAX_TIMEOUT_S`.
+        isolate: run each job in its own process forked from its worker (POSIX), so a
+            job that crashes (a signal, running out of memory) or is stopped by
+            ``job_time_limit`` fails alone and every other job keeps its answer.
 
-    Every worker loads (or compiles) the numba kernels once, before its first
-    job, by solving a tiny problem of each time model in the batch.
+    The kernels are loaded (or compiled, once, with a notice on stderr) in this process
+    before any local worker starts, so the workers only load them from the cache; then
+    every worker loads them before its first job by solving a tiny problem of each
+    time model in the batch.
 
     Raises:
         ParameterError: a bad item, seed, duplicate id, or cluster option;
@@ -524,6 +538,9 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
     """
     if isinstance(problems, (Job, PlanarProblem, MatrixProblem)):
         problems = [problems]
+    if isinstance(problems, (str, bytes, dict)) or not isinstance(problems, Iterable):
+        raise ParameterError(f"solve_many.problems must be a list of Jobs or problems, got "
+                             f"{type(problems).__name__}")
     problems = list(problems)
     if stop is not None:
         from subtask_opt.base.stop import as_criteria
@@ -531,6 +548,14 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
         stop = as_criteria(stop, [])
     if params is not None and not isinstance(params, SolverParams):
         raise ParameterError(f"solve_many.params must be SolverParams, got {params!r}")
+    if job_time_limit is not None:
+        from subtask_opt.batch.pool import MAX_TIMEOUT_S
+
+        require_in_range("solve_many", "job_time_limit", job_time_limit, 0.0, MAX_TIMEOUT_S)
+        if job_time_limit <= 0:
+            raise ParameterError(f"solve_many.job_time_limit must be > 0, got "
+                                 f"{job_time_limit!r}")
+        isolate = True
     tasks, failed = _prepare(problems, seeds)
     results: list[JobResult | None] = [failed.get(i) for i in range(len(tasks))]
     for r in failed.values():
@@ -548,10 +573,13 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
             on_result(value)
 
     if todo:
+        warm = partial(warm_up, _warm_kinds([tasks[i] for i in todo]))
+        if client is None and workers != 0:
+            warm()  # compile once here, with the notice; the workers then load the cache
         map_jobs(run, [tasks[i] for i in todo], workers=workers, scheduler=client,
-                 warm_up=partial(warm_up, _warm_kinds([tasks[i] for i in todo])),
-                 on_result=finished, return_exceptions=True, progress=progress,
-                 desc="batch")
+                 warm_up=warm, on_result=finished, return_exceptions=True,
+                 progress=progress, desc="batch", isolate=isolate,
+                 timeout=job_time_limit)
     assert all(r is not None for r in results)
     return results  # type: ignore[return-value]
 
@@ -590,8 +618,7 @@ def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
     jobs: list[Job] = []
     for raw in paths:
         path = Path(raw)
-        if not path.is_file():
-            raise InputDataError(f"job file not found: {raw}")
+        check_input_file(path, "job file")  # a regular file: never a FIFO or a device
         suffix = path.suffix.lower()
         if suffix == ".csv":
             jobs.append(_file_job(raw, file_options))
@@ -599,10 +626,7 @@ def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
         if suffix != ".json":
             raise InputDataError(f"job file must be a .csv or .json subtask file or a .json "
                                  f"manifest, got {path.name!r}")
-        try:
-            data = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputDataError(f"{raw}: not valid JSON ({exc})") from None
+        data = parse_json(read_text(path, "job file"), str(raw))
         if isinstance(data, dict) and ("points" in data or "targets" in data):
             jobs.append(_file_job(raw, file_options))
             continue

@@ -35,6 +35,7 @@ pool's initializer otherwise.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import functools
 import os
 import uuid
@@ -88,7 +89,8 @@ def map_jobs(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None = 
              warm_up: Callable[[], None] | None = None,
              on_result: Callable[[int, Any], None] | None = None,
              return_exceptions: bool = False, progress: bool = False,
-             desc: str = "jobs") -> list[Any]:
+             desc: str = "jobs", isolate: bool = False,
+             timeout: float | None = None) -> list[Any]:
     """``[fn(item) for item in items]``, run in parallel; results in input order.
 
     Args:
@@ -114,6 +116,11 @@ def map_jobs(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None = 
             other items still run.
         progress: a progress bar on stderr (only on a terminal).
         desc: the progress bar's label.
+        isolate: run every item in its own process forked from the worker (POSIX), so
+            that an item that crashes its process fails alone (:class:`JobCrashed`)
+            instead of taking the worker and its other items down.
+        timeout: (needs ``isolate``) seconds an item may run before it is stopped and
+            fails with :class:`JobTimeout`; at most :data:`MAX_TIMEOUT_S`.
 
     Raises:
         ParameterError: bad ``workers``/``retries``/``chunksize``, both
@@ -126,6 +133,15 @@ def map_jobs(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None = 
     import the main module, as with :mod:`multiprocessing`).
     """
     require_int("map_jobs", "retries", retries, 0, 100)
+    if timeout is not None:
+        from subtask_opt.base.errors import require_in_range
+
+        require_in_range("map_jobs", "timeout", timeout, 0.0, MAX_TIMEOUT_S)
+        if timeout <= 0:
+            raise ParameterError(f"map_jobs.timeout must be > 0, got {timeout!r}")
+        if not isolate:
+            raise ParameterError("map_jobs: timeout needs isolate=True (a job is stopped by "
+                                 "killing its own process)")
     if chunksize is not None:
         require_int("map_jobs", "chunksize", chunksize, 1)
     if workers is not None:
@@ -150,7 +166,8 @@ def map_jobs(fn: Callable[[T], R], items: Iterable[T], *, workers: int | None = 
             if on_result is not None:
                 on_result(index, value)
 
-        run = _Runner(fn, items, done, retries=retries, chunksize=chunksize, warm_up=warm_up,
+        run = _Runner(functools.partial(_run_chunk, fn, isolate=isolate, timeout=timeout),
+                      items, done, retries=retries, chunksize=chunksize, warm_up=warm_up,
                       return_exceptions=return_exceptions)
         if scheduler is not None:
             run.on_dask(scheduler)
@@ -174,10 +191,40 @@ def chunk_size(items: int, slots: int) -> int:
     return max(1, min(MAX_CHUNK, items // (4 * max(1, slots))))
 
 
-def _run_chunk(fn: Callable[[Any], Any], chunk: list[Any]) -> list[tuple[bool, Any]]:
-    """``fn`` over a chunk, in a worker: ``(True, value)`` or ``(False, exception)`` each."""
+class JobTimeout(TimeoutError):
+    """A job ran past ``map_jobs``'s per-job ``timeout`` and was stopped."""
+
+
+class JobCrashed(RuntimeError):
+    """The process running a job died (a signal, ``os._exit``, out of memory)."""
+
+
+MAX_TIMEOUT_S = 7 * 86_400.0
+"""The longest per-job ``timeout`` accepted (a week)."""
+
+_FORKED_FROM: int | None = None
+
+
+def worker_pid() -> int:
+    """The pid of the worker running this job (its own pid, or the worker's when the job
+    runs in a process forked for it)."""
+    return _FORKED_FROM if _FORKED_FROM is not None else os.getpid()
+
+
+def _run_chunk(fn: Callable[[Any], Any], chunk: list[Any], isolate: bool = False,
+               timeout: float | None = None) -> list[tuple[bool, Any]]:
+    """``fn`` over a chunk, in a worker: ``(True, value)`` or ``(False, exception)`` each.
+
+    ``isolate``: each item runs in a process forked from the worker (which has its
+    kernels loaded already, so the fork costs milliseconds): a job that crashes that
+    process, or runs past ``timeout`` seconds and is killed, fails alone
+    (:class:`JobCrashed`, :class:`JobTimeout`) and the worker goes on.
+    """
     out: list[tuple[bool, Any]] = []
     for item in chunk:
+        if isolate and hasattr(os, "fork"):
+            out.append(_run_forked(fn, item, timeout))
+            continue
         try:
             out.append((True, fn(item)))
         except Exception as exc:
@@ -185,13 +232,103 @@ def _run_chunk(fn: Callable[[Any], Any], chunk: list[Any]) -> list[tuple[bool, A
     return out
 
 
+def _run_forked(fn: Callable[[Any], Any], item: Any,
+                timeout: float | None) -> tuple[bool, Any]:
+    """``fn(item)`` in a forked child; its pickled outcome comes back through a pipe."""
+    import pickle
+    import selectors
+    import signal
+    import time
+
+    read_fd, write_fd = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: run, send, leave without running the parent's exit handlers
+        os.close(read_fd)
+        code = 0
+        try:
+            global _FORKED_FROM
+            _FORKED_FROM = os.getppid()
+            with contextlib.suppress(ValueError):  # the parent decides on Ctrl-C
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+            try:
+                outcome: tuple[bool, Any] = (True, fn(item))
+            except Exception as exc:  # noqa: BLE001 - travels to the parent
+                outcome = (False, exc)
+            try:
+                data = pickle.dumps(outcome, protocol=pickle.HIGHEST_PROTOCOL)
+            except Exception as exc:  # noqa: BLE001 - an unpicklable value or exception
+                data = pickle.dumps((False, RuntimeError(f"{type(exc).__name__}: {exc}")))
+            view = memoryview(data)
+            while view:
+                view = view[os.write(write_fd, view):]
+        except BaseException:  # noqa: BLE001
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(write_fd)
+    chunks: list[bytes] = []
+    deadline = None if timeout is None else time.monotonic() + timeout
+    timed_out = False
+    with selectors.DefaultSelector() as sel:
+        sel.register(read_fd, selectors.EVENT_READ)
+        try:
+            while True:
+                wait = None if deadline is None else deadline - time.monotonic()
+                if wait is not None and wait <= 0:
+                    timed_out = True
+                    break
+                if not sel.select(wait):
+                    continue
+                block = os.read(read_fd, 1 << 20)
+                if not block:
+                    break
+                chunks.append(block)
+        except BaseException:  # Ctrl-C in the worker: take the child down too
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+            os.close(read_fd)
+            raise
+    os.close(read_fd)
+    if timed_out:
+        os.kill(pid, signal.SIGKILL)
+        os.waitpid(pid, 0)
+        return False, JobTimeout(f"the job ran past the per-job time limit of {timeout:g} s "
+                                 "and was stopped")
+    _, status = os.waitpid(pid, 0)
+    if chunks:
+        try:
+            return pickle.loads(b"".join(chunks))
+        except Exception as exc:  # noqa: BLE001 - a truncated message: the child died
+            return False, JobCrashed(f"the job's process died while reporting ({exc})")
+    if os.WIFSIGNALED(status):
+        number = os.WTERMSIG(status)
+        try:
+            name = signal.Signals(number).name
+        except ValueError:
+            name = str(number)
+        return False, JobCrashed(f"the job's process was killed by {name}")
+    return False, JobCrashed(f"the job's process exited with code {os.WEXITSTATUS(status)} "
+                             "without a result")
+
+
+def _ignore_sigint(warm_up: Callable[[], None] | None) -> None:
+    """A local worker's initializer: Ctrl-C reaches the whole process group, and only the
+    parent (which stops the pool and prints one line) should act on it."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if warm_up is not None:
+        warm_up()
+
+
 class _Runner:
     """One map_jobs call: the items, their chunks and where the results go."""
 
-    def __init__(self, fn: Callable[[Any], Any], items: list[Any],
-                 done: Callable[[int, Any], None], *, retries: int, chunksize: int | None,
-                 warm_up: Callable[[], None] | None, return_exceptions: bool) -> None:
-        self.fn, self.items, self.done = fn, items, done
+    def __init__(self, run_chunk: Callable[[list[Any]], list[tuple[bool, Any]]],
+                 items: list[Any], done: Callable[[int, Any], None], *, retries: int,
+                 chunksize: int | None, warm_up: Callable[[], None] | None,
+                 return_exceptions: bool) -> None:
+        self.run_chunk, self.items, self.done = run_chunk, items, done
         self.retries, self.chunksize, self.warm_up = retries, chunksize, warm_up
         self.return_exceptions = return_exceptions
 
@@ -212,25 +349,30 @@ class _Runner:
         if self.warm_up is not None:
             self.warm_up()
         for index, item in enumerate(self.items):
-            self.deliver(range(index, index + 1), _run_chunk(self.fn, [item]))
+            self.deliver(range(index, index + 1), self.run_chunk([item]))
 
     def on_process_pool(self, workers: int) -> None:
         # spawn, not fork: the parent may hold threads (a Dask client, numba's pool) and locks
-        with ProcessPoolExecutor(max_workers=min(workers, len(self.items)),
-                                 mp_context=get_context("spawn"),
-                                 initializer=self.warm_up) as pool:
-            pending = {pool.submit(_run_chunk, self.fn, [self.items[i] for i in r]): r
-                       for r in self.chunks(workers)}
-            try:
-                while pending:
-                    finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                    for future in finished:
-                        indices = pending.pop(future)
-                        exc = future.exception()  # the pool broke (a worker died)
-                        self.deliver(indices, future.result() if exc is None else exc)
-            finally:
-                for future in pending:
-                    future.cancel()
+        pool = ProcessPoolExecutor(max_workers=min(workers, len(self.items)),
+                                   mp_context=get_context("spawn"),
+                                   initializer=_ignore_sigint, initargs=(self.warm_up,))
+        pending = {pool.submit(self.run_chunk, [self.items[i] for i in r]): r
+                   for r in self.chunks(workers)}
+        try:
+            while pending:
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    indices = pending.pop(future)
+                    exc = future.exception()  # the pool broke (a worker died)
+                    self.deliver(indices, future.result() if exc is None else exc)
+        except BaseException:  # Ctrl-C or a raised job: stop the workers, do not wait
+            for future in pending:
+                future.cancel()
+            for proc in list(getattr(pool, "_processes", {}).values()):
+                proc.kill()
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown(wait=True)
 
     def on_local_dask(self, workers: int) -> None:
         import logging
@@ -274,8 +416,7 @@ class _Runner:
                                    name=f"subtask_opt-warm-up-{_token(self.warm_up)}")
         batch = uuid.uuid4().hex[:12]
         chunks = self.chunks(sum(client.nthreads().values()))
-        futures = client.map(_run_chunk, [self.fn] * len(chunks),
-                             [[self.items[i] for i in r] for r in chunks],
+        futures = client.map(self.run_chunk, [[self.items[i] for i in r] for r in chunks],
                              key=[f"{KEY_PREFIX}-{batch}-{r.start}-{r.stop}" for r in chunks],
                              retries=self.retries, pure=False)
         chunk_of = {f.key: r for f, r in zip(futures, chunks, strict=True)}
@@ -314,5 +455,6 @@ def _warm_up_plugin(warm_up: Callable[[], None]) -> Any:
     return WarmUp(warm_up)
 
 
-__all__ = ["INSTALL_HINT", "KEY_PREFIX", "MAX_CHUNK", "chunk_size", "dask_available",
-           "default_workers", "job_indices", "map_jobs"]
+__all__ = ["INSTALL_HINT", "KEY_PREFIX", "MAX_CHUNK", "MAX_TIMEOUT_S", "JobCrashed",
+           "JobTimeout", "chunk_size", "dask_available", "default_workers", "job_indices",
+           "map_jobs"]

@@ -12,6 +12,14 @@ from typing import Any
 import numpy as np
 
 
+def ascii_number(text: str) -> str:
+    """``text`` if it is written in ASCII, else ``ValueError``: Python's ``int``/``float``
+    read Arabic-Indic, full-width and other Unicode digits, which an option never means."""
+    if not text.isascii():
+        raise ValueError(f"not an ASCII number: {text!r}")
+    return text
+
+
 def point(text: str, dims: int = 2) -> tuple[float, ...]:
     """Parse ``"X,Y"`` (or ``"X,Y,H"`` for dims=3) into finite floats."""
     parts = text.split(",")
@@ -19,7 +27,7 @@ def point(text: str, dims: int = 2) -> tuple[float, ...]:
         raise argparse.ArgumentTypeError(
             f"expected {dims} comma-separated numbers, got {text!r}")
     try:
-        values = tuple(float(p) for p in parts)
+        values = tuple(float(ascii_number(p)) for p in parts)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number in {text!r}") from None
     if not all(math.isfinite(v) for v in values):
@@ -33,14 +41,21 @@ EXIT_FAILED = 1
 """The job ran and failed: no path, stall, collision, timeout, infeasible tour."""
 EXIT_BAD_INPUT = 2
 """A user mistake: bad option, unreadable or malformed input (one line on stderr)."""
+EXIT_INTERRUPTED = 130
+"""Interrupted by SIGINT (Ctrl-C), as shells report it: one line, no partial output."""
 
 MAX_GENERATIONS = 10_000_000
 MAX_STALL = 1_000_000
 MAX_RUNTIME_S = 86_400.0
+MAX_WORKERS = 256
+"""The most local worker processes ``--workers`` starts."""
+MAX_INDEX = 10_000_000
+"""The largest subtask index ``--first``/``--end`` take."""
 
 
-def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: bool) -> None:
-    """The GA's stopping options, bounded (``--target`` too when ``target``)."""
+def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: bool) -> Any:
+    """The GA's stopping options, bounded (``--target`` too when ``target``); returns the
+    argument group (a command may add its own)."""
     stop = parser.add_argument_group(title)
     stop.add_argument("--max-generations", type=int_in(1, MAX_GENERATIONS), metavar="N",
                       help=f"at most N generations, N in [1, {MAX_GENERATIONS}]")
@@ -52,7 +67,8 @@ def add_stop_options(parser: argparse.ArgumentParser, *, title: str, target: boo
                            f"N in [1, {MAX_STALL}]")
     if target:
         stop.add_argument("--target", type=float_in(0.0, 1e12), metavar="SECONDS",
-                          help="stop once the total time is at most this")
+                          help="stop once the total time is at most this, in [0, 1e12]")
+    return stop
 
 
 def stop_criteria(args: argparse.Namespace) -> list[Any] | None:
@@ -85,7 +101,7 @@ ANIMATION_SUFFIXES = (".gif",)
 def seed(text: str) -> int:
     """A random seed: a whole number in [0, 2**63)."""
     try:
-        value = int(text)
+        value = int(ascii_number(text))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
     if not 0 <= value < SEED_LIMIT:
@@ -97,7 +113,7 @@ def int_in(low: int, high: int) -> Any:
     """An argparse type: a whole number in [low, high]."""
     def parse(text: str) -> int:
         try:
-            value = int(text)
+            value = int(ascii_number(text))
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
         if not low <= value <= high:
@@ -112,7 +128,7 @@ def float_in(low: float, high: float, *, open_low: bool = False) -> Any:
     """An argparse type: a finite number in [low, high] (or (low, high] with ``open_low``)."""
     def parse(text: str) -> float:
         try:
-            value = float(text)
+            value = float(ascii_number(text))
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
         ok = math.isfinite(value) and (value > low if open_low else value >= low) \
@@ -129,7 +145,7 @@ def float_in(low: float, high: float, *, open_low: bool = False) -> Any:
 def floats(text: str) -> tuple[float, ...]:
     """One or more comma-separated finite numbers > 0 (a scalar or one per joint)."""
     try:
-        values = tuple(float(t) for t in text.split(","))
+        values = tuple(float(ascii_number(t)) for t in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected numbers like 1.5 or 1.5,2, got {text!r}") \
             from None
@@ -139,13 +155,18 @@ def floats(text: str) -> tuple[float, ...]:
 
 
 def _output(text: str, suffixes: tuple[str, ...] | None) -> str:
+    from subtask_opt.base.errors import ParameterError
+    from subtask_opt.base.files import check_output
+
     if not text.strip():
         raise argparse.ArgumentTypeError("the output path is empty")
     if suffixes and Path(text).suffix.lower() not in suffixes:
         raise argparse.ArgumentTypeError(
             f"{text!r} must end in {' or '.join(suffixes)}")
-    if Path(text).is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is a folder, not a file")
+    try:
+        check_output(text)
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return text
 
 
@@ -162,6 +183,23 @@ def plot_output(text: str) -> str:
 def animation_output(text: str) -> str:
     """A path for ``--animate`` (.gif)."""
     return _output(text, ANIMATION_SUFFIXES)
+
+
+def output_folder(text: str) -> str:
+    """A folder for many outputs (``reproduce --out``): not a file, and writable (a missing
+    one is created)."""
+    from subtask_opt.base.errors import ParameterError
+    from subtask_opt.base.files import check_output
+
+    if not text.strip() or text.strip() == "-":
+        raise argparse.ArgumentTypeError(f"expected a folder, got {text!r}")
+    if Path(text).exists() and not Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a file, not a folder")
+    try:
+        check_output(Path(text) / "probe", "output folder")
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc).replace("/probe", "")) from None
+    return text
 
 
 def html_output(text: str) -> str:
@@ -187,14 +225,32 @@ def add_no_progress(parser: argparse.ArgumentParser) -> None:
 
 def refuse_overwriting_inputs(inputs: list[str | Path | None],
                               outputs: list[str | Path | None]) -> None:
-    """Raise :class:`InputDataError` when an output path is one of the input files."""
+    """Raise :class:`ParameterError` when an output path is one of the input files (the
+    same file by another name too: a symbolic or hard link), or two outputs are one file."""
+    import os
+
     from subtask_opt.base.errors import ParameterError
 
-    existing = {Path(i).resolve() for i in inputs if i and Path(i).is_file()}
+    def identity(path: str | Path) -> tuple[int, int] | Path:
+        try:
+            info = os.stat(path)
+            return (info.st_dev, info.st_ino)
+        except (OSError, ValueError):
+            return Path(path).resolve()
+
+    existing = {identity(i): i for i in inputs if i and Path(i).is_file()}
+    seen: dict[tuple[int, int] | Path, str | Path] = {}
     for out in outputs:
-        if out and Path(out).resolve() in existing:
-            raise ParameterError(f"output {str(out)!r} is also an input file; "
-                                 "choose another path")
+        if not out:
+            continue
+        key = identity(out)
+        if key in existing:
+            raise ParameterError(f"output {str(out)!r} is also an input file "
+                                 f"({str(existing[key])!r}); choose another path")
+        if key in seen or Path(out).resolve() in {Path(s).resolve() for s in seen.values()}:
+            raise ParameterError(f"outputs {str(seen.get(key, out))!r} and {str(out)!r} are "
+                                 "the same file; choose another path")
+        seen[key] = out
 
 
 def point3(text: str) -> tuple[float, ...]:
@@ -203,7 +259,7 @@ def point3(text: str) -> tuple[float, ...]:
 
 def _whole_number(text: str, minimum: int) -> int:
     try:
-        value = int(text)
+        value = int(ascii_number(text))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
     if value < minimum:
@@ -221,7 +277,7 @@ def non_negative_int(text: str) -> int:
 
 def positive_float(text: str) -> float:
     try:
-        value = float(text)
+        value = float(ascii_number(text))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
     if not math.isfinite(value) or value <= 0:
@@ -247,11 +303,19 @@ def _jsonable(value: Any) -> Any:
 
 
 def write_json(path: str | Path, payload: dict[str, Any]) -> None:
-    """Write ``payload`` as JSON (numpy values converted, inf/nan as null)."""
-    path = Path(path)
-    if path.parent and not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_jsonable(payload), indent=2) + "\n")
+    """Write ``payload`` as JSON (numpy values converted, inf/nan as null) to a temporary
+    file renamed onto ``path``: a failed write leaves no partial file."""
+    from subtask_opt.base.files import write_text_atomic
+
+    write_text_atomic(path, json.dumps(_jsonable(payload), indent=2) + "\n", "--json file")
+
+
+def output_file(path: str | Path) -> Any:
+    """``with output_file(path) as tmp:`` write to ``tmp``; renamed onto ``path`` when the
+    block succeeds, removed when it fails (:func:`subtask_opt.base.files.atomic_output`)."""
+    from subtask_opt.base.files import atomic_output
+
+    return atomic_output(path)
 
 
 def ensure_parent(path: str | Path) -> Path:
@@ -259,6 +323,15 @@ def ensure_parent(path: str | Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def scheduler_address(text: str) -> str:
+    """``--scheduler``: a dask address ``PROTOCOL://HOST[:PORT]`` in printable ASCII."""
+    protocol, _, rest = text.partition("://")
+    if not (text.isascii() and text.isprintable() and protocol.isalpha() and rest.strip()):
+        raise argparse.ArgumentTypeError(f"expected a scheduler address like "
+                                         f"tcp://head:8786, got {text!r}")
+    return text
 
 
 def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs",
@@ -275,14 +348,14 @@ def add_workers(parser: argparse.ArgumentParser, *, what: str = "the jobs",
         "where to run", f"{what} run on local worker processes (a Dask cluster, or a "
                         "process pool without dask) or on an existing Dask cluster")
     group = where.add_mutually_exclusive_group()
-    group.add_argument("--scheduler", metavar="ADDRESS",
+    group.add_argument("--scheduler", metavar="ADDRESS", type=scheduler_address,
                        help="address of a running dask scheduler, e.g. tcp://head:8786 "
                             "(needs pip install subtask_opt[cluster])")
     default = "0" if serial_default else "the machine's cores"
-    group.add_argument("--workers", type=non_negative_int, metavar="N",
+    group.add_argument("--workers", type=int_in(0, MAX_WORKERS), metavar="N",
                        default=0 if serial_default else None,
-                       help=f"local worker processes (default: {default}; "
-                            "0 runs in this process)")
+                       help=f"local worker processes, N in [0, {MAX_WORKERS}] (default: "
+                            f"{default}; 0 runs in this process)")
 
 
 def workers_options(args: argparse.Namespace) -> dict[str, Any]:

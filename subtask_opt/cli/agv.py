@@ -11,12 +11,15 @@ from subtask_opt.cli._common import (
     add_workers,
     animation_output,
     failed,
-    positive_int,
+    int_in,
+    output_file,
     seed,
     where_text,
     workers_options,
 )
 
+MAX_FRAMES = 2_000
+MAX_RUNS = 100_000
 
 def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``plan agv`` and ``bench agv``."""
@@ -40,8 +43,8 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
     add_outputs(p, what="the run (events, trajectory)", plot="a figure of the run")
     p.add_argument("--animate", metavar="OUT.gif", type=animation_output,
                    help="write a GIF of the run")
-    p.add_argument("--frames", type=positive_int, default=160,
-                   help="at most this many GIF frames (default: 160)")
+    p.add_argument("--frames", type=int_in(1, MAX_FRAMES), default=160, metavar="N",
+                   help=f"at most N GIF frames, N in [1, {MAX_FRAMES}] (default: 160)")
     p.set_defaults(handler=_run_plan)
 
     b = bench.add_parser(
@@ -49,7 +52,8 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
         description="Run N seeded random scenarios (1-5 obstacles crossing the route) with "
                     "odometry drift, with and without corner check points. Exit 1 when a "
                     "run (with check points) collides or times out.")
-    b.add_argument("--n", type=positive_int, default=200, help="number of runs (default: 200)")
+    b.add_argument("--n", type=int_in(1, MAX_RUNS), default=200, metavar="N",
+                   help=f"number of runs, N in [1, {MAX_RUNS}] (default: 200)")
     b.add_argument("--seed", type=seed, default=0,
                    help="seed of the first run; run i uses seed + i (default: 0)")
     b.add_argument("--no-collision-check", action="store_true",
@@ -83,10 +87,12 @@ def _run_plan(args: argparse.Namespace) -> int:
         from subtask_opt.plotting import agv as plots
 
         if args.plot:
-            plots.save_run_figure(run, args.plot)
+            with output_file(args.plot) as tmp:
+                plots.save_run_figure(run, tmp)
             print(f"figure written to {args.plot}")
         if args.animate:
-            plots.animate_run(run, args.animate, max_frames=args.frames)
+            with output_file(args.animate) as tmp:
+                plots.animate_run(run, tmp, max_frames=args.frames)
             print(f"animation written to {args.animate}")
     if not run.success:
         return failed(f"the AGV run ended in {run.outcome.value}")
@@ -116,7 +122,8 @@ def _run_bench(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting import agv as plots
 
-        plots.save_suite_figure(report, args.plot)
+        with output_file(args.plot) as tmp:
+            plots.save_suite_figure(report, tmp)
         print(f"figure written to {args.plot}")
     if report.collisions + report.timeouts:
         return failed(f"{report.collisions} collisions and {report.timeouts} timeouts in "

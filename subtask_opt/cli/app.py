@@ -8,6 +8,7 @@ handlers, so ``--help`` is instant. A user mistake prints one line and exits 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import re
 import sys
@@ -15,10 +16,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from subtask_opt.base.errors import NoPathError, SubtaskOptError
-from subtask_opt.cli._common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
+from subtask_opt.cli._common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
 
 EPILOG = ("exit codes: 0 the job succeeded; 1 it ran and failed (no path, stall, collision, "
-          "infeasible); 2 bad input (one line on stderr)")
+          "infeasible); 2 bad input (one line on stderr); 130 interrupted (Ctrl-C)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -88,6 +89,10 @@ def _discard_stdout() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the process exit code (see :data:`EPILOG`)."""
+    for stream in (sys.stdout, sys.stderr):
+        # a name from an input file that no terminal encoding can show is escaped, not fatal
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(errors="backslashreplace")  # type: ignore[union-attr]
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
@@ -105,6 +110,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         _discard_stdout()
         print("subtask-opt: failed: standard output was closed before the run finished",
               file=sys.stderr)
+        return EXIT_FAILED
+    except KeyboardInterrupt:  # Ctrl-C: outputs are written whole or not at all
+        print("subtask-opt: interrupted; no output was written for the unfinished work",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print("subtask-opt: failed: out of memory (a smaller problem, or fewer workers, "
+              "needs less)", file=sys.stderr)
         return EXIT_FAILED
     except OSError as exc:  # unreadable input, unwritable output
         name = getattr(exc, "filename", None)

@@ -12,7 +12,9 @@ from subtask_opt.cli._common import (
     add_no_progress,
     add_stop_options,
     add_workers,
+    float_in,
     json_output,
+    output_file,
     plot_output,
     refuse_overwriting_inputs,
     seed,
@@ -22,6 +24,8 @@ from subtask_opt.cli._common import (
     write_json,
 )
 
+MAX_JOB_TIME_S = 86_400.0
+"""The longest ``--job-time-limit``."""
 FILE_OPTIONS = ("robot", "time_model", "home", "scene", "standoff", "axis_step", "tool_frame")
 """The options that become :class:`~subtask_opt.batch.Job` fields of every file job."""
 
@@ -62,8 +66,13 @@ def register(root: argparse._SubParsersAction) -> None:
     p.add_argument("--seed", type=seed, default=None, metavar="N",
                    help="solver seed of every job (default: each manifest job's own seed, "
                         "0 for subtask files)")
-    add_stop_options(p, title="stopping, per job (any criterion given stops the run)",
-                     target=False)
+    stop = add_stop_options(p, title="stopping, per job (any criterion given stops the run)",
+                            target=False)
+    stop.add_argument("--job-time-limit", type=float_in(0.0, MAX_JOB_TIME_S, open_low=True),
+                      default=None, metavar="SECONDS",
+                      help=f"stop a job that runs longer than this, in (0, "
+                           f"{MAX_JOB_TIME_S:g}] (its reading and building too, unlike "
+                           "--time-limit): it fails alone, the others keep their answers")
     p.add_argument("--json", required=True, metavar="OUT.json", type=json_output,
                    help="write every job's result (and the failed jobs' errors) as JSON")
     p.add_argument("--plot", metavar="OUT.png", type=plot_output,
@@ -83,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     results = solve_many(jobs, seeds=args.seed, stop=stop_criteria(args),
                          client=where["scheduler"], workers=where["workers"],
-                         progress=not args.no_progress and sys.stderr.isatty())
+                         progress=not args.no_progress and sys.stderr.isatty(),
+                         job_time_limit=args.job_time_limit)
     wall = time.perf_counter() - started
     failed = [r for r in results if not r.success]
     # wall_s includes starting the workers and loading their kernels;
@@ -106,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.batch import save_batch_figure
 
-        save_batch_figure(results, args.plot, title=f"batch of {len(results)} jobs on "
-                                                    f"{summary['where']}")
+        with output_file(args.plot) as tmp:
+            save_batch_figure(results, tmp, title=f"batch of {len(results)} jobs on "
+                                                  f"{summary['where']}")
         print(f"wrote {args.plot}")
     return EXIT_FAILED if failed else EXIT_OK

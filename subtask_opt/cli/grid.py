@@ -26,8 +26,8 @@ from subtask_opt.cli._common import (
     failed,
     float_in,
     int_in,
+    output_file,
     point,
-    positive_int,
     refuse_overwriting_inputs,
     seed,
     stop_criteria,
@@ -85,7 +85,8 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
                     "Times are after a JIT warm-up, best of --repeats runs.")
     b.add_argument("--seed", type=seed, default=0,
                    help=f"seed of the stochastic planners ({stochastic}; default 0)")
-    b.add_argument("--repeats", type=positive_int, default=3, help="timed runs (default 3)")
+    b.add_argument("--repeats", type=int_in(1, 1000), default=3, metavar="N",
+                   help="timed runs, N in [1, 1000] (default 3)")
     add_outputs(b, what="the table rows", plot="a figure of the six maps with their paths")
     add_no_progress(b)
     b.set_defaults(handler=_run_bench_grid)
@@ -159,8 +160,10 @@ def _run_plan(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.grid import save_grid_plot
 
-        save_grid_plot(args.plot, world, [report.result], start=report.start, goal=report.goal,
-                       title=f"{world.name or Path(args.map).name}: {args.planner}")
+        with output_file(args.plot) as tmp:
+            save_grid_plot(tmp, world, [report.result], start=report.start,
+                           goal=report.goal,
+                           title=f"{world.name or Path(args.map).name}: {args.planner}")
     if not report.result.success:
         return failed(f"{report.result.outcome}: {report.result.message}")
     return EXIT_OK
@@ -186,7 +189,8 @@ def _run_bench_grid(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.grid import save_comparison_figure
 
-        save_comparison_figure(args.plot, cases, rows)
+        with output_file(args.plot) as tmp:
+            save_comparison_figure(tmp, cases, rows)
     return EXIT_OK
 
 
@@ -212,7 +216,8 @@ def _run_bench_movingai(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.grid import save_movingai_figure
 
-        save_movingai_figure(args.plot, world, scen, report)
+        with output_file(args.plot) as tmp:
+            save_movingai_figure(tmp, world, scen, report)
     if report.mismatches:
         return failed(f"{report.mismatches} rows differ from the scenario file's optimum")
     return EXIT_OK

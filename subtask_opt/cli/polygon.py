@@ -17,11 +17,13 @@ from typing import Any
 from subtask_opt.cli._common import (
     EXIT_FAILED,
     EXIT_OK,
+    MAX_RUNTIME_S,
     add_no_progress,
     add_outputs,
+    float_in,
+    int_in,
+    output_file,
     point,
-    positive_float,
-    positive_int,
     refuse_overwriting_inputs,
     seed,
     write_json,
@@ -65,7 +67,8 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
     b.add_argument("--pair", nargs=2, type=point, action="append", metavar=("START", "GOAL"),
                    help="a start/goal pair X,Y X,Y (repeatable; default: the built-in pairs "
                         "for seed003)")
-    b.add_argument("--runs", type=positive_int, default=10, help="PSO seeds per pair (default 10)")
+    b.add_argument("--runs", type=int_in(1, 10_000), default=10, metavar="N",
+                   help="PSO seeds per pair, N in [1, 10000] (default 10)")
     b.add_argument("--seed", type=seed, default=0,
                    help="first PSO seed; run k uses seed + k (default 0)")
     _add_pso_options(b)
@@ -76,13 +79,16 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
 
 def _add_pso_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("PSO", "swarm and stopping criteria (first met stops)")
-    g.add_argument("--swarm", type=positive_int, default=None, help="particles (default 40)")
-    g.add_argument("--iterations", type=positive_int, default=200,
-                   help="at most this many iterations (default 200)")
-    g.add_argument("--stall", type=positive_int, default=50,
-                   help="stop after this many iterations without improvement (default 50)")
-    g.add_argument("--time-limit", type=positive_float, default=None, metavar="S",
-                   help="stop after S seconds")
+    g.add_argument("--swarm", type=int_in(1, 10_000), default=None, metavar="N",
+                   help="particles, N in [1, 10000] (default 40)")
+    g.add_argument("--iterations", type=int_in(1, 1_000_000), default=200, metavar="N",
+                   help="at most N iterations, N in [1, 1000000] (default 200)")
+    g.add_argument("--stall", type=int_in(1, 1_000_000), default=50, metavar="N",
+                   help="stop after N iterations without improvement, N in [1, 1000000] "
+                        "(default 50)")
+    g.add_argument("--time-limit", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
+                   default=None, metavar="S",
+                   help=f"stop after S seconds, S in (0, {MAX_RUNTIME_S:g}]")
 
 
 def _pso_setup(args: argparse.Namespace) -> tuple[Any, list[Any]]:
@@ -130,7 +136,8 @@ def _run_plan(args: argparse.Namespace) -> int:
         fig = plot.planner_figure(world, {args.planner: result}, optimum=run.optimum,
                                   graph=run.graph,
                                   title=f"{world.name or args.world}: {args.planner}")
-        plot.save(fig, args.plot)
+        with output_file(args.plot) as tmp:
+            plot.save(fig, tmp)
         print(f"wrote {args.plot}")
     if not result.success:
         print(f"subtask-opt: failed: {result.planner}: {result.message}", file=sys.stderr)
@@ -171,7 +178,8 @@ def _run_bench(args: argparse.Namespace) -> int:
             world, results, optimum=optimum, graph=graph,
             title=f"{world.name or args.world}: Dijkstra, improved, PSO, optimum\n"
                   f"({sx:g}, {sy:g}) -> ({gx:g}, {gy:g})")
-        plot.save(fig, args.plot)
+        with output_file(args.plot) as tmp:
+            plot.save(fig, tmp)
         print(f"wrote {args.plot}")
     failed = [k + 1 for k, r in enumerate(rows) if not r["found"]]
     if failed:

@@ -17,10 +17,13 @@ from subtask_opt.cli._common import (
     add_outputs,
     add_workers,
     animation_output,
+    ascii_number,
     failed,
+    output_file,
     point,
     point3,
     positive_int,
+    refuse_overwriting_inputs,
     seed,
     where_text,
     workers_options,
@@ -31,13 +34,14 @@ from subtask_opt.cli._common import (
 def _numbers(text: str) -> tuple[float, ...]:
     """Comma-separated finite numbers."""
     try:
-        values = tuple(float(p) for p in text.split(","))
+        values = tuple(float(ascii_number(p)) for p in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}"
                                          ) from None
     if not all(math.isfinite(v) for v in values):
         raise argparse.ArgumentTypeError(f"values must be finite, got {text!r}")
     return values
+
 
 
 def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -73,7 +77,8 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
         "reactive", help="fuzzy vs VFF vs VFH on seeded random cluttered worlds",
         description="Run every navigator on N random scenarios and print success, collisions, "
                     "stalls, timeouts, path ratio to the exact shortest path and clearance.")
-    b.add_argument("--n", type=positive_int, default=200, help="number of scenarios")
+    b.add_argument("--n", type=positive_int, default=200,
+                   help="number of scenarios, at most 1000000 (default 200)")
     b.add_argument("--seed", type=seed, default=0, help="seed of the scenarios and the noise")
     b.add_argument("--navigators", nargs="+", choices=list(navigators),
                    default=list(navigators), help=listing)
@@ -137,6 +142,7 @@ def _run_plan(args: argparse.Namespace) -> int:
     from subtask_opt.planners.reactive.scenarios import resolve_world
     from subtask_opt.planners.reactive.simulation import simulate
 
+    refuse_overwriting_inputs([args.world], [args.json, args.plot, args.animate])
     params = _params(args)
     world, scenario = resolve_world(args.world)
     if args.start is not None:
@@ -159,10 +165,12 @@ def _run_plan(args: argparse.Namespace) -> int:
         from subtask_opt.plotting import reactive as rplot
 
         if args.plot:
-            rplot.save_run_figure(world, run, args.plot)
+            with output_file(args.plot) as tmp:
+                rplot.save_run_figure(world, run, tmp)
         if args.animate:
-            rplot.animate_run(world, run, args.animate, every=2,
-                              progress=not args.no_progress)
+            with output_file(args.animate) as tmp:
+                rplot.animate_run(world, run, tmp, every=2,
+                                  progress=not args.no_progress)
     return EXIT_OK if run.success else failed(f"{run.outcome.value}: {run.message}")
 
 
@@ -198,8 +206,9 @@ def _run_bench(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.reactive import save_suite_figure
 
-        save_suite_figure(table, args.plot, title=f"{args.n} random worlds, seed {args.seed}, "
-                                                  f"sonar noise {args.noise:g}")
+        with output_file(args.plot) as tmp:
+            save_suite_figure(table, tmp, title=f"{args.n} random worlds, seed {args.seed}, "
+                                                f"sonar noise {args.noise:g}")
     return EXIT_OK
 
 
@@ -220,5 +229,6 @@ def _run_fuzzy_table(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.reactive import save_table1_figure
 
-        save_table1_figure(report, args.plot)
+        with output_file(args.plot) as tmp:
+            save_table1_figure(report, tmp)
     return EXIT_OK if report.matches or report.weighted else EXIT_FAILED

@@ -5,7 +5,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from subtask_opt.cli._common import EXIT_OK, add_no_progress, add_workers, seed, workers_options
+from subtask_opt.cli._common import (
+    EXIT_OK,
+    add_no_progress,
+    add_workers,
+    output_folder,
+    seed,
+    workers_options,
+)
 
 PAPER_IDS = ("000", "001", "002", "003", "004")
 
@@ -20,7 +27,7 @@ def register(root: argparse._SubParsersAction) -> None:
                     "numbered result of the paper beside ours with the deviation.")
     p.add_argument("paper", metavar="PAPER",
                    help=f"the paper's number: {', '.join(PAPER_IDS)}")
-    p.add_argument("--out", default="out/papers", metavar="DIR",
+    p.add_argument("--out", default="out/papers", metavar="DIR", type=output_folder,
                    help="folder for the figures and tables (default: out/papers)")
     p.add_argument("--quick", action="store_true",
                    help="fewer seeds and runs (a smoke test; the numbers are less settled)")
@@ -38,6 +45,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.paper not in PAPERS:
         raise ParameterError(f"PAPER must be one of {', '.join(PAPERS)}, got {args.paper!r}")
+    if args.paper != "004" and (args.scheduler is not None or args.workers):
+        given = "--scheduler" if args.scheduler is not None else "--workers"
+        raise ParameterError(f"{given} applies to paper 004's suite only; paper {args.paper} "
+                             "runs in this process")
     where = workers_options(args)
     map_runs = None
     if where["scheduler"] is not None or where["workers"]:

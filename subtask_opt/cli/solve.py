@@ -14,18 +14,20 @@ from subtask_opt.base.stop import TargetCost
 from subtask_opt.cli._common import (
     EXIT_FAILED,
     EXIT_OK,
+    MAX_INDEX,
     MAX_RUNTIME_S,
     add_no_progress,
     add_outputs,
     add_stop_options,
     animation_output,
+    ascii_number,
     failed,
     float_in,
     floats,
     html_output,
     int_in,
     json_output,
-    non_negative_int,
+    output_file,
     refuse_overwriting_inputs,
     seed,
     stop_criteria,
@@ -74,15 +76,16 @@ def register(root: argparse._SubParsersAction) -> None:
                    help="paper and trapezoid models: check every straight line for the "
                         "arm's joint limits, not only the tour's legs (JSON diagnostics; "
                         "N(N-1)/2 lines, seconds at N = 1000)")
-    p.add_argument("--first", type=non_negative_int, default=None, metavar="I",
-                   help="index of the subtask the tour (or open path) starts at; with a "
-                        "serial arm's home, the first target after it")
+    p.add_argument("--first", type=int_in(0, MAX_INDEX), default=None, metavar="I",
+                   help=f"index of the subtask the tour (or open path) starts at, in [0, "
+                        f"{MAX_INDEX}]; with a serial arm's home, the first target after it")
     shape = p.add_argument_group("tour shape and constraints")
     shape.add_argument("--tour", choices=("closed", "open"), default="closed",
                        help="closed: return to the start (default); open: a path that does "
                             "not come back")
-    shape.add_argument("--end", type=non_negative_int, default=None, metavar="I",
-                       help="(--tour open) the subtask the path ends at (default: free); a "
+    shape.add_argument("--end", type=int_in(0, MAX_INDEX), default=None, metavar="I",
+                       help=f"(--tour open) the subtask the path ends at, in [0, {MAX_INDEX}] "
+                            "(default: free); a "
                             "serial arm's closed tour: the last target before home")
     shape.add_argument("--home", type=signed_numbers, default=None, metavar="X,Y|Q1,...,QN",
                        help="visited first and last, not a subtask: a point X,Y (m) the planar "
@@ -191,6 +194,10 @@ def run(args: argparse.Namespace) -> int:
                              **_problem_options(args, robot.planar))
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
+    if args.precedence:  # its indices against the subtasks, the file's line named
+        from subtask_opt.tour.constraints import read_precedence
+
+        read_precedence(args.precedence, size=problem.size)
     stop = _stop(args, started)
     if stop == "spent":
         return failed(f"the time limit of {args.max_runtime:g} s was spent building the "
@@ -235,16 +242,12 @@ def run(args: argparse.Namespace) -> int:
 
 def _limits(value: str | None) -> Any:
     """``--limits``: a limit-set name, or the per-joint arrays of a JSON file."""
-    import json
-
-    from subtask_opt.base.errors import InputDataError
+    from subtask_opt.base.files import parse_json, read_text
 
     if value is None or not value.lower().endswith(".json"):
         return value
-    try:
-        return json.loads(Path(value).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise InputDataError(f"cannot read the limits file {value}: {exc}") from None
+    return parse_json(read_text(value, "limits file", max_bytes=1 << 20),
+                      f"limits file {value}")
 
 
 def _targets(args: argparse.Namespace, robot: Any) -> Any:
@@ -360,17 +363,19 @@ def _plot(args: argparse.Namespace, problem: Any, result: Any, executed: Any) ->
     if problem.robot.planar:
         from subtask_opt.plotting.sequencing import save_solution_figure
 
-        save_solution_figure(result, problem.compiled, args.plot)
+        with output_file(args.plot) as tmp:
+            save_solution_figure(result, problem.compiled, tmp)
     else:
         from subtask_opt.plotting.serial import plot_serial_tour
 
         trajectory = executed[0]
         q = trajectory.states(trajectory.sample_times(0.01))[0]
         serial = problem.compiled
-        plot_serial_tour(serial.arm, serial.targets.points, trajectory.tool_positions(q),
-                         result.leg_times, result.order, args.plot,
-                         title=_title(args, problem, result), q_home=serial.home,
-                         scene=serial.scene)
+        with output_file(args.plot) as tmp:
+            plot_serial_tour(serial.arm, serial.targets.points, trajectory.tool_positions(q),
+                             result.leg_times, result.order, tmp,
+                             title=_title(args, problem, result), q_home=serial.home,
+                             scene=serial.scene)
     print(f"wrote {args.plot}")
 
 
@@ -383,13 +388,15 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
                       trajectory: Any) -> None:
     """``--trajectory`` (CSV), ``--animate`` (planar GIF) and ``--view`` (3-D HTML)."""
     if args.trajectory:
-        trajectory.to_csv(args.trajectory, args.dt)
+        with output_file(args.trajectory) as tmp:
+            trajectory.to_csv(tmp, args.dt)
         print(f"wrote {args.trajectory}")
     if args.animate:
         from subtask_opt.plotting.trajectory import animate_tour
 
-        animate_tour(problem.compiled, trajectory, args.animate,
-                     progress=not args.no_progress and sys.stderr.isatty())
+        with output_file(args.animate) as tmp:
+            animate_tour(problem.compiled, trajectory, tmp,
+                         progress=not args.no_progress and sys.stderr.isatty())
         print(f"wrote {args.animate}")
     if args.view:
         from subtask_opt.plotting.arm3d import write_tour_html
@@ -397,9 +404,10 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
         serial = problem.compiled
         times = trajectory.sample_times(0.01)
         q = trajectory.states(times)[0]
-        write_tour_html(args.view, serial.arm, times, q, targets=serial.targets.points,
-                        axes=serial.targets.axes, scene=serial.scene, order=result.order,
-                        title=_title(args, problem, result))
+        with output_file(args.view) as tmp:
+            write_tour_html(tmp, serial.arm, times, q, targets=serial.targets.points,
+                            axes=serial.targets.axes, scene=serial.scene, order=result.order,
+                            title=_title(args, problem, result))
         print(f"wrote {args.view}")
 
 
@@ -427,9 +435,10 @@ def add_cell_options(g: Any) -> None:
                         '"rotation"}]}')
     g.add_argument("--standoff", type=float_in(-1.0, 1.0), default=None, metavar="M",
                    help="tool standoff along its axis in metres (default 0)")
-    g.add_argument("--axis-step", type=float_in(0.0, 360.0, open_low=True), default=None,
-                   metavar="DEG", help="sampling step of the free rotation about a tool axis "
-                                       "(default 45)")
+    g.add_argument("--axis-step", type=float_in(5.0, 360.0), default=None,
+                   metavar="DEG", help="sampling step of the free rotation about a tool axis, "
+                                       "in [5, 360] (default 45); targets x 360 / DEG may be "
+                                       "at most 2500 poses")
     g.add_argument("--tool-frame", metavar="FRAME", help="tool frame (default: the robot's)")
 
 
@@ -438,7 +447,7 @@ def signed_numbers(text: str) -> tuple[float, ...]:
     import math
 
     try:
-        values = tuple(float(v) for v in text.split(","))
+        values = tuple(float(ascii_number(v)) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected comma-separated numbers, got {text!r}") from None

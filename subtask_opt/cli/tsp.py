@@ -6,9 +6,11 @@ import argparse
 
 from subtask_opt.cli._common import (
     EXIT_OK,
+    MAX_RUNTIME_S,
     add_no_progress,
     add_outputs,
-    positive_float,
+    float_in,
+    output_file,
     refuse_overwriting_inputs,
     seed,
     write_json,
@@ -26,9 +28,10 @@ def register(root: argparse._SubParsersAction) -> None:
                     "lower bound: the tour is at most 'gap' above the optimum. Lengths are in "
                     "TSPLIB units (integer distances under the file's rounding rule).")
     p.add_argument("file", metavar="FILE.tsp", help="the TSPLIB file")
-    p.add_argument("--time-limit", type=positive_float, default=DEFAULT_TIME_LIMIT,
-                   metavar="SECONDS",
-                   help=f"stop the search after this long (default {DEFAULT_TIME_LIMIT:g}); it "
+    p.add_argument("--time-limit", type=float_in(0.0, MAX_RUNTIME_S, open_low=True),
+                   default=DEFAULT_TIME_LIMIT, metavar="SECONDS",
+                   help=f"stop the search after this long, in (0, {MAX_RUNTIME_S:g}] (default "
+                        f"{DEFAULT_TIME_LIMIT:g}); it "
                         "also stops once the tour stops improving. The lower bound then gets "
                         "what the search left, and at least a quarter of the limit")
     p.add_argument("--seed", type=seed, default=0, help="solver seed (default 0)")
@@ -67,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.plot:
         from subtask_opt.plotting.tsp import save_tour_figure
 
-        save_tour_figure(instance, solution, args.plot)
+        with output_file(args.plot) as tmp:
+            save_tour_figure(instance, solution, tmp)
         print(f"wrote {args.plot}")
     return EXIT_OK

@@ -244,21 +244,62 @@ def find_cycle(pairs: Sequence[tuple[int, int]]) -> list[int] | None:
     return None
 
 
-def read_precedence(path: str | Path) -> tuple[tuple[int, int], ...]:
-    """Precedence pairs from a text file: one ``a,b`` per line (``#`` comments, blank lines ok)."""
+MAX_INDEX_DIGITS = 9
+"""The most digits a subtask index of a precedence file may have."""
+
+
+def read_precedence(path: str | Path, *, size: int | None = None) -> tuple[tuple[int, int], ...]:
+    """Precedence pairs from a text file: one ``a,b`` per line (``#`` comments, blank lines ok).
+
+    Each index is ASCII digits (at most :data:`MAX_INDEX_DIGITS`; no superscripts, no
+    Arabic-Indic or full-width digits), and with ``size`` below it. A pair of a subtask with
+    itself, a pair given twice and a cycle are refused; every error names the file and the
+    line (a cycle: its subtasks and the lines of its pairs).
+
+    Raises:
+        InputDataError: the first problem found, in one line.
+    """
     from subtask_opt.base.files import read_text
 
     text = read_text(Path(path), what="precedence file")
     pairs: list[tuple[int, int]] = []
+    line_of: dict[tuple[int, int], int] = {}
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.split("#", 1)[0].strip()
         if not line:
             continue
         parts = [p.strip() for p in line.split(",")]
-        if len(parts) != 2 or not all(p.isdigit() for p in parts):
+        shown = raw.strip()[:60]
+        if len(parts) != 2 or not all(p.isascii() and p.isdigit() for p in parts):
             raise InputDataError(f"{path}: line {number}: expected 'a,b' (two non-negative "
-                                 f"subtask indices), got {raw.strip()!r}")
-        pairs.append((int(parts[0]), int(parts[1])))
+                                 f"subtask indices in ASCII digits), got {shown!r}")
+        if any(len(p) > MAX_INDEX_DIGITS for p in parts):
+            raise InputDataError(f"{path}: line {number}: an index of more than "
+                                 f"{MAX_INDEX_DIGITS} digits in {shown!r}")
+        a, b = int(parts[0]), int(parts[1])
+        if a == b:
+            raise InputDataError(f"{path}: line {number}: '{a},{b}' puts subtask {a} before "
+                                 "itself")
+        if size is not None and max(a, b) >= size:
+            raise InputDataError(f"{path}: line {number}: '{a},{b}' names subtask "
+                                 f"{max(a, b)}; subtasks are numbered 0..{size - 1}")
+        if (a, b) in line_of:
+            raise InputDataError(f"{path}: line {number}: '{a},{b}' repeats line "
+                                 f"{line_of[(a, b)]}")
+        line_of[(a, b)] = number
+        pairs.append((a, b))
+        if len(pairs) > MAX_PAIRS:
+            raise InputDataError(f"{path}: line {number}: more than {MAX_PAIRS} precedence "
+                                 "constraints")
+    cycle = find_cycle(pairs)
+    if cycle is not None:
+        edges = list(zip(cycle, cycle[1:], strict=False))
+        lines = ", ".join(str(line_of[e]) for e in edges[:20]) + (", ..." if len(edges) > 20
+                                                                  else "")
+        members = " -> ".join(str(v) for v in cycle[:21]) + (" -> ..." if len(cycle) > 21
+                                                               else "")
+        raise InputDataError(f"{path}: lines {lines} form a cycle of {len(edges)} subtasks: "
+                             f"{members}")
     return tuple(pairs)
 
 

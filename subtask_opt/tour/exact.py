@@ -37,7 +37,11 @@ if TYPE_CHECKING:
 
 
 def _square_matrix(matrix: np.ndarray) -> np.ndarray:
-    m = np.asarray(matrix, dtype=float)
+    try:
+        m = np.asarray(matrix, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"need a square matrix of numbers, got "
+                             f"{type(matrix).__name__}") from None
     if m.ndim != 2 or m.shape[0] != m.shape[1] or m.shape[0] < 3:
         raise ParameterError(f"need a square matrix of at least 3 x 3, got shape {m.shape}")
     if not np.all(np.isfinite(m)):

@@ -148,12 +148,10 @@ def read_tsplib(path: str | Path, *, max_matrix_bytes: int = MAX_MATRIX_BYTES,
         OSError: the file cannot be read.
     """
     require_int("read_tsplib", "max_file_bytes", max_file_bytes, 1)
+    from subtask_opt.base.files import read_bytes
+
     path = Path(path)
-    size = path.stat().st_size
-    if size > max_file_bytes:
-        raise InputDataError(
-            f"{path}: the file has {size} bytes, more than the limit of {max_file_bytes}")
-    raw = path.read_bytes()
+    raw = read_bytes(path, "TSPLIB file", max_bytes=max_file_bytes)  # regular files only
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -194,6 +192,12 @@ class _Parser:
 
     # -- driver
     def parse(self, default_name: str) -> TspInstance:
+        for number, raw in enumerate(self.lines, start=1):  # Arabic-Indic digits and the
+            # like would pass int() and float(); only names and comments may be Unicode
+            if not raw.isascii() and not raw.lstrip().upper().startswith(("NAME", "COMMENT")):
+                bad = next(c for c in raw if not c.isascii())
+                raise self.error(number, f"a non-ASCII character {bad!a} outside NAME and "
+                                         "COMMENT")
         while self.pos < len(self.lines):
             number = self.pos + 1
             line = self.lines[self.pos].strip()

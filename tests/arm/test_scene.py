@@ -119,7 +119,7 @@ def test_scene_file_not_json(tmp_path):
     path.write_text("{boxes: ")
     with pytest.raises(InputDataError, match="not valid JSON"):
         Scene.load(path)
-    with pytest.raises(InputDataError, match="cannot read"):
+    with pytest.raises(InputDataError, match="not found"):
         Scene.load(tmp_path / "missing.json")
 
 

@@ -58,7 +58,7 @@ def _one_error_line(capsys) -> str:
 
 
 @pytest.mark.parametrize(("lines", "args", "message"), [
-    ("1,2\n2,5\n5,1\n", [], "precedence constraints form a cycle: 1 -> 2 -> 5 -> 1"),
+    ("1,2\n2,5\n5,1\n", [], "lines 1, 2, 3 form a cycle of 3 subtasks: 1 -> 2 -> 5 -> 1"),
     ("1,40\n", [], "names subtask 40; subtasks are numbered 0..19"),
     ("1;2\n", [], "line 1: expected 'a,b'"),
     ("3,0\n", [], "before the start 0"),

@@ -73,9 +73,9 @@ CHECKS = {"000": _check_000, "001": _check_001, "002": _check_002, "003": _check
 
 @pytest.mark.parametrize("paper", list(PAPERS))
 def test_quick_reproduction_exits_0_and_writes_its_table_and_figures(paper, tmp_path, capsys):
-    # 004's suite on two local workers; the other papers take the option and ignore it
-    workers = "2" if paper == "004" else "1"
-    code = main(["reproduce", paper, "--out", str(tmp_path), "--quick", "--workers", workers,
+    # 004's suite on two local workers; the other papers run here and refuse the option
+    workers = ["--workers", "2"] if paper == "004" else []
+    code = main(["reproduce", paper, "--out", str(tmp_path), "--quick", *workers,
                  "--no-progress"])
     text = capsys.readouterr().out
     assert code == 0
@@ -94,7 +94,9 @@ def test_quick_reproduction_exits_0_and_writes_its_table_and_figures(paper, tmp_
 
 @pytest.mark.parametrize("argv", [["reproduce", "005"], ["reproduce", "1"], ["reproduce"],
                                   ["reproduce", "001", "--seed", "-1"],
-                                  ["reproduce", "004", "--workers", "-2"]])
+                                  ["reproduce", "004", "--workers", "-2"],
+                                  ["reproduce", "002", "--workers", "2"],
+                                  ["reproduce", "000", "--scheduler", "tcp://head:8786"]])
 def test_bad_input_exits_2_in_one_line(argv, capsys, tmp_path):
     assert main([*argv, "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err

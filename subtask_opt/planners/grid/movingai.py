@@ -75,6 +75,8 @@ def read_scenarios(path: str | Path) -> Scenarios:
         if len(parts) != 9:
             raise InputDataError(f"{path}: line {n}: expected 9 columns, got {len(parts)}")
         try:
+            if not all(p.isascii() for p in parts):  # int() reads Arabic-Indic digits too
+                raise ValueError
             row = tuple(int(p) for p in (parts[0], *parts[2:8]))
             value = float(parts[8])
         except ValueError:

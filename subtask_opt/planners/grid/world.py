@@ -230,16 +230,7 @@ def check_small_grid(world: GridWorld, max_free_cells: int, why: str) -> None:
 def read_file_bytes(path: Path, what: str) -> bytes:
     """The bytes of ``path``, refusing files over :data:`MAX_FILE_BYTES` (the
     byte-level twin of :func:`subtask_opt.base.files.read_text`, for PNG images)."""
-    try:
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise InputDataError(f"{what} file {str(path)!r} has {size} bytes, more than the "
-                                 f"limit of {MAX_FILE_BYTES} ({MAX_FILE_BYTES / 2**20:g} MiB)")
-        with path.open("rb") as fh:
-            return fh.read(MAX_FILE_BYTES + 1)
-    except OSError as exc:
-        raise InputDataError(f"cannot read {what} {str(path)!r}: "
-                             f"{exc.strerror or exc}") from None
+    return files.read_bytes(path, f"{what} file", max_bytes=MAX_FILE_BYTES)  # regular only
 
 
 def decode_text(data: bytes, source: str) -> str:
@@ -304,6 +295,8 @@ def _movingai_occupancy(text: str, source: str) -> np.ndarray:
     if i == len(lines):
         raise InputDataError(f"{source}: no 'map' line found")
     try:
+        if not (header["height"].isascii() and header["width"].isascii()):
+            raise ValueError  # int() reads Arabic-Indic digits too
         height, width = int(header["height"]), int(header["width"])
     except (KeyError, ValueError):
         shown = {k: v[:20] for k, v in list(header.items())[:4]}

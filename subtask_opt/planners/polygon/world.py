@@ -332,13 +332,10 @@ class PolygonWorld:
             OSError: the file cannot be read.
             InputDataError: the file is too large or malformed (the message names it).
         """
+        from subtask_opt.base.files import read_bytes
+
         path = Path(path)
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise InputDataError(f"{path}: {size} bytes is over the limit of {MAX_FILE_BYTES} "
-                                 "bytes for a world file")
-        with path.open("rb") as fh:
-            data = fh.read(MAX_FILE_BYTES + 1)
+        data = read_bytes(path, "world file", max_bytes=MAX_FILE_BYTES)  # regular files only
         return cls.from_text(data, name=path.stem, source=str(path))
 
     def to_json(self, path: str | Path) -> None:

@@ -98,7 +98,7 @@ def test_from_png(tmp_path):
     (tmp_path / "bad.png").write_text("not an image")
     with pytest.raises(InputDataError, match="cannot read image"):
         GridWorld.from_png(tmp_path / "bad.png")
-    with pytest.raises(InputDataError, match="cannot read image"):
+    with pytest.raises(InputDataError, match="image file not found"):
         GridWorld.from_png(tmp_path / "missing.png")
 
 
@@ -198,5 +198,5 @@ def test_size_limits(tmp_path, monkeypatch):
         GridWorld.from_png(tmp_path / "wide.png")
     monkeypatch.setattr(world_module, "MAX_FILE_BYTES", 10)
     (tmp_path / "big.txt").write_text("." * 11)
-    with pytest.raises(InputDataError, match="11 bytes, more than the limit"):
+    with pytest.raises(InputDataError, match="has 11 bytes; the limit is 10"):
         read_grid(tmp_path / "big.txt")

@@ -216,7 +216,7 @@ def test_reader_depth_ignores_brackets_in_strings():
 def test_reader_refuses_oversize_files(tmp_path):
     big = tmp_path / "big.json"
     big.write_text('{"bounds": [0, 0, 1, 1], "obstacles": []}' + " " * MAX_FILE_BYTES)
-    with pytest.raises(InputDataError, match=f"over the limit of {MAX_FILE_BYTES} bytes"):
+    with pytest.raises(InputDataError, match=f"the limit is {MAX_FILE_BYTES}"):
         PolygonWorld.from_json(big)
     bom = tmp_path / "bom.json"
     bom.write_bytes(b"\xef\xbb\xbf" + json.dumps(POCKET).encode())

@@ -203,7 +203,7 @@ def test_bad_json_file(tmp_path):
     path.write_text("{not json")
     with pytest.raises(InputDataError, match="bad.json"):
         PolygonWorld.from_json(path)
-    with pytest.raises(OSError):
+    with pytest.raises(InputDataError, match="not found"):  # one line, never an OSError
         PolygonWorld.from_json(tmp_path / "missing.json")
 
 
