@@ -142,16 +142,11 @@ def read_gtsplib(path: str | Path, *, max_file_bytes: int = MAX_FILE_BYTES) -> G
         OSError: the file cannot be read.
     """
     require_int("read_gtsplib", "max_file_bytes", max_file_bytes, 1)
+    from subtask_opt.base.files import read_text
+
     path = Path(path)
-    size = path.stat().st_size
-    if size > max_file_bytes:
-        raise InputDataError(f"{path}: the file has {size} bytes, more than the limit of "
-                             f"{max_file_bytes}")
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise InputDataError(f"{path}: not a text file ({exc.reason} at byte {exc.start})") \
-            from None
+    # a regular UTF-8 text file of at most max_file_bytes (FIFOs, devices, binary refused)
+    text = read_text(path, "GTSPLIB file", max_bytes=max_file_bytes)
     return parse_gtsplib(text, source=str(path), default_name=path.stem)
 
 

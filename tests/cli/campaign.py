@@ -97,6 +97,12 @@ class Outcome:
 TSP = ("NAME: ring\nTYPE: TSP\nDIMENSION: 8\nEDGE_WEIGHT_TYPE: EUC_2D\nNODE_COORD_SECTION\n"
        + "".join(f"{i + 1} {round(100 * math.cos(i)):d} {round(100 * math.sin(i)):d}\n"
                  for i in range(8)) + "EOF\n")
+GTSP = ("NAME: ring\nTYPE: GTSP\nDIMENSION: 8\nGTSP_SETS: 4\nEDGE_WEIGHT_TYPE: EUC_2D\n"
+        "NODE_COORD_SECTION\n"
+        + "".join(f"{i + 1} {round(100 * math.cos(i)):d} {round(100 * math.sin(i)):d}\n"
+                  for i in range(8))
+        + "GTSP_SET_SECTION\n" + "".join(f"{k + 1} {2 * k + 1} {2 * k + 2} -1\n"
+                                          for k in range(4)) + "EOF\n")
 UR5_TARGETS = ("x,y,z,dx,dy,dz\n0.45,-0.15,0.20,1,0,-0.3\n0.45,0.05,0.20,1,0,-0.3\n"
                "0.42,-0.10,0.35,1,0,-0.3\n0.40,0.10,0.30,1,0,-0.3\n")
 SUBTASKS = "x,y\n" + "".join(f"{0.3 + 0.05 * (i % 4)},{0.1 * (i // 4) - 0.2}\n"
@@ -116,6 +122,7 @@ class Fixtures:
             "sub.csv": w("sub.csv", SUBTASKS),
             "t3d.csv": w("t3d.csv", UR5_TARGETS),
             "ring.tsp": w("ring.tsp", TSP),
+            "ring.gtsp": w("ring.gtsp", GTSP),
             "prec.txt": w("prec.txt", "0,1\n2,3\n"),
             "scene.json": w("scene.json", '{"boxes": []}\n'),
             "manifest.json": w("manifest.json", '[{"id": "a", "case": "square20"}]\n'),
@@ -288,6 +295,17 @@ def malformed(kind: str, rng: random.Random) -> list[tuple[str, str | bytes]]:
             ("content: large case", '{"points": [' + ",".join(["[0.4, 0.1]"] * 300_000)
              + "]}"),
         ]
+    if kind == "gtsp":
+        out += [
+            ("content: gtsp huge dimension", GTSP.replace("DIMENSION: 8",
+                                                          "DIMENSION: 100000000000")),
+            ("content: gtsp 5000-digit sets", GTSP.replace("GTSP_SETS: 4",
+                                                           "GTSP_SETS: " + digits)),
+            ("content: gtsp vertex in two sets", GTSP.replace("2 3 4 -1", "2 3 1 -1")),
+            ("content: gtsp set without -1", GTSP.replace("4 7 8 -1", "4 7 8")),
+            ("content: gtsp no sets", GTSP.split("GTSP_SET_SECTION")[0] + "EOF\n"),
+            ("content: gtsp nan coordinate", GTSP.replace("1 100 0", "1 nan 0")),
+        ]
     if kind == "tsp":
         out += [
             ("content: tsp huge dimension", TSP.replace("DIMENSION: 8",
@@ -399,6 +417,8 @@ def commands(fx: Fixtures) -> list[Command]:
                  "--plot": ".png"}, ("--scene", g["scene.json"])),
         Command("tsp", ("tsp", g["ring.tsp"], "--time-limit", "0.5", "--no-progress"),
                 {"": "tsp"}, {"--json": ".json", "--plot": ".png"}, ("", g["ring.tsp"])),
+        Command("gtsp", ("gtsp", g["ring.gtsp"], "--time-limit", "0.5", "--no-progress"),
+                {"": "gtsp"}, {"--json": ".json", "--plot": ".png"}, ("", g["ring.gtsp"])),
         Command("batch", ("batch", g["sub.csv"], "--workers", "0", "--max-generations", "3",
                           "--no-progress", "--json", str(fx.root / "outputs" / "batch.json")),
                 {"": "csv", "--scene": "scene"}, {"--json": ".json", "--plot": ".png"},
@@ -514,8 +534,9 @@ def generate(fx: Fixtures, n: int, seed: int) -> list[Attempt]:
                     continue
                 out.append(Attempt(f"option: {kind}", _with(cmd.base, option, v)))
         for option, mkind in cmd.inputs.items():
-            suffix = {"csv": ".csv", "t3d": ".csv", "tsp": ".tsp", "prec": ".txt",
-                      "scene": ".json", "limits": ".json", "manifest": ".json", "json": ".json",
+            suffix = {"csv": ".csv", "t3d": ".csv", "tsp": ".tsp", "gtsp": ".gtsp",
+                      "prec": ".txt", "scene": ".json", "limits": ".json",
+                      "manifest": ".json", "json": ".json",
                       "urdf": ".urdf", "world": ".json", "scenario": ".json",
                       "map": ".map"}[mkind]
             job_file = cmd.name == "batch" and option == ""
@@ -562,8 +583,8 @@ def generate(fx: Fixtures, n: int, seed: int) -> list[Attempt]:
     while len(out) < n:
         cmd = rng.choice(fill)
         option, mkind = rng.choice(sorted(cmd.inputs.items()))
-        suffix = {"csv": ".csv", "t3d": ".csv", "tsp": ".tsp", "prec": ".txt"}.get(mkind,
-                                                                                   ".json")
+        suffix = {"csv": ".csv", "t3d": ".csv", "tsp": ".tsp", "gtsp": ".gtsp",
+                  "prec": ".txt"}.get(mkind, ".json")
         if mkind in ("urdf",):
             suffix = ".urdf"
         if mkind == "map":
@@ -580,7 +601,8 @@ def generate(fx: Fixtures, n: int, seed: int) -> list[Attempt]:
 def _random_content(kind: str, rng: random.Random) -> str:
     """A random mutation of a valid file of ``kind``: characters dropped, repeated,
     replaced with digits, signs, quotes, non-ASCII digits, huge numbers."""
-    valid = {"csv": SUBTASKS, "t3d": UR5_TARGETS, "tsp": TSP, "prec": "0,1\n2,3\n",
+    valid = {"csv": SUBTASKS, "t3d": UR5_TARGETS, "tsp": TSP, "gtsp": GTSP,
+             "prec": "0,1\n2,3\n",
              "scene": '{"boxes": [{"name": "b", "center": [2, 2, 2], "half_extents": '
                       '[0.1, 0.1, 0.1]}]}',
              "limits": '{"velocity": [3, 3, 3, 3, 3, 3]}',
