@@ -574,8 +574,10 @@ def solve_many(problems: Sequence[Job | PlanarProblem | MatrixProblem], *,
 
     if todo:
         warm = partial(warm_up, _warm_kinds([tasks[i] for i in todo]))
-        if client is None and workers != 0:
-            warm()  # compile once here, with the notice; the workers then load the cache
+        if client is None and (workers != 0 or isolate):
+            # compile once here, with the notice: worker processes then load the cache, and
+            # jobs forked from this process (isolate) inherit the compiled kernels
+            warm()
         map_jobs(run, [tasks[i] for i in todo], workers=workers, scheduler=client,
                  warm_up=warm, on_result=finished, return_exceptions=True,
                  progress=progress, desc="batch", isolate=isolate,
