@@ -250,6 +250,7 @@ def _run_forked(fn: Callable[[Any], Any], item: Any,
             _FORKED_FROM = os.getppid()
             with contextlib.suppress(ValueError):  # the parent decides on Ctrl-C
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
+            _die_with_parent(_FORKED_FROM)
             try:
                 outcome: tuple[bool, Any] = (True, fn(item))
             except Exception as exc:  # noqa: BLE001 - travels to the parent
@@ -309,6 +310,19 @@ def _run_forked(fn: Callable[[Any], Any], item: Any,
         return False, JobCrashed(f"the job's process was killed by {name}")
     return False, JobCrashed(f"the job's process exited with code {os.WEXITSTATUS(status)} "
                              "without a result")
+
+
+def _die_with_parent(parent: int) -> None:
+    """(Linux) Kill this forked job when the process that forked it ends, e.g. a worker
+    stopped on Ctrl-C: an orphaned job would run on and hold the parent's output pipes."""
+    import ctypes
+    import signal
+
+    with contextlib.suppress(OSError, AttributeError):
+        pr_set_pdeathsig = 1
+        ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, int(signal.SIGKILL))
+    if os.getppid() != parent:  # the parent ended before the request took effect
+        os._exit(1)
 
 
 def _ignore_sigint(warm_up: Callable[[], None] | None) -> None:
