@@ -35,7 +35,14 @@ from typing import Any
 import numpy as np
 
 from subtask_opt.base.errors import InputDataError, ParameterError, require_int
-from subtask_opt.tour.tsplib import MAX_DISTANCE, MAX_FILE_BYTES, distance_matrix
+from subtask_opt.tour.tsplib import (
+    MAX_DISTANCE,
+    MAX_FILE_BYTES,
+    _clip,
+    _is_number,
+    _weight_count,
+    distance_matrix,
+)
 
 PROBLEM_TYPES = ("GTSP", "AGTSP", "PCGLNS")
 EDGE_WEIGHT_TYPES = ("EUC_2D", "CEIL_2D", "GEO", "ATT", "EXPLICIT")
@@ -516,26 +523,6 @@ class _Parser:
                                     f"an asymmetric one): weight {i + 1} -> {j + 1} is "
                                     f"{m[i, j]:g}, {j + 1} -> {i + 1} is {m[j, i]:g}")
         return m
-
-
-def _weight_count(fmt: str, n: int) -> int:
-    if fmt == "FULL_MATRIX":
-        return n * n
-    if "DIAG" in fmt:
-        return n * (n + 1) // 2
-    return n * (n - 1) // 2
-
-
-def _is_number(token: str) -> bool:
-    try:
-        float(token)
-    except ValueError:
-        return False
-    return True
-
-
-def _clip(text: str, limit: int = 40) -> str:
-    return text if len(text) <= limit else text[:limit] + "..."
 
 
 # --------------------------------------------------------------------------- solving
