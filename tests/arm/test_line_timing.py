@@ -278,7 +278,7 @@ def test_jerk_limited_line_picks_a_near_best_averaging_width() -> None:
                 tk, sk = lk.profile_knots(sg, x, w)
                 u = (b - a) / np.linalg.norm(b - a)
                 best = min(lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, np.sqrt(x), w,
-                                        tk, sk, tau, lim) * (t1 + tau)
+                                        tk, sk, tau, lim, np.inf) * (t1 + tau)
                            for tau in t1 * np.geomspace(1e-3, 2.0, 120))
                 ratios.append(chosen / best)
     assert len(ratios) >= 8
@@ -340,7 +340,8 @@ def test_the_breakpoint_check_is_never_below_a_dense_sampling() -> None:
             v = np.sqrt(x)
             u = (b - a) / np.linalg.norm(b - a)
             for tau in t1 * np.array([0.003, 0.05, 0.3, 1.0]):
-                check = lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, v, w, tk, sk, tau, lim)
+                check = lk._slowdown(arm.kinematics, a, u[0], u[1], c, sg, v, w, tk, sk, tau, lim,
+                                     np.inf)
                 dense = _dense_slowdown(lk, arm.kinematics, a, u, c, sg, qs, v, w, tk, sk, tau,
                                         inv, lim.has_jerk)
                 assert check * (1 + lim.margin) >= dense, (i, j, tau / t1)
@@ -364,3 +365,55 @@ def _dense_slowdown(lk, kin, p0, u, branch, sg, qs, v, w, tk, sk, tau, inv, has_
         lk._exact_derivatives(kin, p0, u[0], u[1], branch, sg, qs, f, g, der, tmp)
         rv, ra, rj = lk._ratios(tuple(der), f1, f2, f3, f3, inv, has_jerk, rv, ra, rj)
     return max(rv, math.sqrt(ra), rj ** (1.0 / 3.0))
+
+
+def test_a_bounded_judgement_of_a_width_stops_only_above_its_bound() -> None:
+    # oracle: the same width judged in full (bound inf). Below its bound a judgement is the
+    # full one, flagged complete; above it, a lower bound of the full one that is above the
+    # bound, so every comparison the width search makes with it comes out the same
+    from subtask_opt.arm.timing import _line_kernels as lk
+    from subtask_opt.arm.timing.models import line_limits
+
+    arm = _arm("planar_2r")
+    lim = line_limits(arm, 256)
+    s = random_subtasks(arm, 6, seed=4)
+    q = arm.ik(s.points)
+    kin = arm.kinematics
+    checked = stopped = 0
+    for i in range(6):
+        for j in range(i + 1, 6):
+            for c in range(2):
+                if np.isnan(q[[i, j], c, 0]).any():
+                    continue
+                a, b = s.points[i].copy(), s.points[j].copy()
+                st, sg, qs, der = lk.line_geometry(kin, a, b, c, q[i, c].copy(),
+                                                   q[j, c].copy(), lim.grid)
+                if st != lk.LINE_OK:
+                    continue
+                ok, x, w, t1 = lk.topp_profile(der, sg, lim.vel, lim.acc, lim.kv, lim.ka,
+                                               lim.kw, lim.kw_dot)
+                tk, sk = lk.profile_knots(sg, x, w)
+                v = np.sqrt(x)
+                u = (b - a) / np.linalg.norm(b - a)
+                jumps = lk._jump_times(tk, w)
+                index = lk._time_index(tk, lk.TIME_BUCKETS)
+                for tau in t1 * np.array([0.01, 0.15, 0.8]):
+                    full, done = lk._estimate(kin, a, u[0], u[1], c, sg, v, w, tk, sk, tau,
+                                              lim, jumps, index, np.inf)
+                    assert done
+                    exact = lk._slowdown(kin, a, u[0], u[1], c, sg, v, w, tk, sk, tau, lim,
+                                         np.inf)
+                    for share in (0.3, 0.9, 1.0, 1.2):
+                        bound = share * full
+                        part, done = lk._estimate(kin, a, u[0], u[1], c, sg, v, w, tk, sk,
+                                                  tau, lim, jumps, index, bound)
+                        if done:
+                            assert part == full
+                        else:
+                            stopped += 1
+                            assert bound < part <= full * (1 + 1e-15)
+                        low = lk._slowdown(kin, a, u[0], u[1], c, sg, v, w, tk, sk, tau, lim,
+                                           share * exact)
+                        assert low == (exact if share >= 1.0 else np.inf)
+                    checked += 1
+    assert checked >= 12 and stopped >= checked
