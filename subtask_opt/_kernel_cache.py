@@ -104,6 +104,21 @@ def _announce(what: str) -> None:
               file=sys.stderr, flush=True)
 
 
+def announce_if_empty(what: str) -> None:
+    """The compile notice now, before the imports and set-up that precede the first kernel,
+    when this source tree's cache holds no compiled kernel at all (a first run: everything
+    will be compiled). Otherwise the notice waits for the first kernel numba must compile
+    (:class:`_PackageCompiles`), if any."""
+    if _announced:
+        return
+    try:
+        empty = next(CACHE_DIR.rglob("*.nbi"), None) is None
+    except OSError:
+        empty = True
+    if empty:
+        _announce(what)
+
+
 class _PackageCompiles(event.Listener):
     """Around numba's compilation (or cache load) of each of the package's kernels: sets
     :data:`KERNEL_OPT` for it (restored after), and announces the first kernel that must

@@ -76,6 +76,22 @@ def test_a_warm_group_is_not_announced(tmp_path, monkeypatch, capsys):
     assert capsys.readouterr().err == "" and not _kernel_cache._announced
 
 
+def test_an_empty_cache_is_announced_before_any_kernel_and_a_filled_one_is_not(
+        tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(_kernel_cache, "CACHE_DIR", tmp_path)
+    monkeypatch.setattr(_kernel_cache, "_announced", False)
+    (tmp_path / "tour_x").mkdir()
+    (tmp_path / "tour_x" / "solve.f-1.py311.nbi").write_bytes(b"")  # one compiled kernel
+    _kernel_cache.announce_if_empty("the kernels")
+    assert capsys.readouterr().err == "" and not _kernel_cache._announced
+    (tmp_path / "tour_x" / "solve.f-1.py311.nbi").unlink()
+    _kernel_cache.announce_if_empty("the kernels this batch needs")
+    said = capsys.readouterr().err
+    assert said.count("\n") == 1 and "compiling the kernels this batch needs" in said
+    _kernel_cache.announce_if_empty("the kernels this batch needs")  # once per process
+    assert capsys.readouterr().err == ""
+
+
 _FIRST_KERNEL = """
 import numba, numpy as np
 from numba.core import event

@@ -375,6 +375,9 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
     """
     if kinds in _WARMED:
         return
+    from subtask_opt._kernel_cache import announce_if_empty
+
+    announce_if_empty("the kernels this batch needs")
     from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import random_subtasks
     from subtask_opt.base.stop import MaxGenerations

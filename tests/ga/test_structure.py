@@ -136,3 +136,24 @@ def test_importing_the_package_loads_no_planner() -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_the_cli_starts_without_the_robot_or_solver_modules_and_every_public_name_loads() -> None:
+    # the command line can speak (its notice, --help) before Pinocchio and the solver load;
+    # the public names resolve on first use, each to the object its module defines
+    code = ("import sys, subtask_opt.cli; "
+            "print(sorted(m for m in ('pinocchio', 'subtask_opt.tour.solve', "
+            "'subtask_opt.arm.problem') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
+    import importlib
+
+    import subtask_opt
+
+    assert set(subtask_opt.__all__) == set(subtask_opt._MODULE_OF) <= set(dir(subtask_opt))
+    for name in subtask_opt.__all__:
+        module = importlib.import_module(subtask_opt._MODULE_OF[name])
+        assert getattr(subtask_opt, name) is getattr(module, name)
+    with pytest.raises(AttributeError, match="no_such_name"):
+        subtask_opt.no_such_name  # noqa: B018
