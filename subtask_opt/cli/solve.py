@@ -323,21 +323,13 @@ def _trajectory_json(trajectory: Any, check: Any) -> dict[str, Any]:
 
 
 def _constraints(args: argparse.Namespace, planar: bool) -> Any:
-    """The ``TourConstraints`` of the shape options (an output that cannot draw the shape:
-    one error line)."""
-    from subtask_opt.base.errors import ParameterError
+    """The ``TourConstraints`` of the shape options."""
     from subtask_opt.tour.constraints import TourConstraints, read_precedence
 
     pairs = read_precedence(args.precedence) if args.precedence else ()
     # a planar arm's --first is its problem's first subtask (ArmProblem.first)
     start = None if planar else args.first
-    constraints = TourConstraints(tour=args.tour, start=start, end=args.end, precedence=pairs)
-    homed = args.home is not None or args.home_joints is not None
-    if planar and args.plot and (args.tour == "open" or homed):
-        raise ParameterError("--plot draws closed tours over the subtasks (planar arms); not "
-                             "available with --tour open or --home yet (--trajectory and "
-                             "--animate are)")
-    return constraints
+    return TourConstraints(tour=args.tour, start=start, end=args.end, precedence=pairs)
 
 
 def _executed(args: argparse.Namespace, result: Any) -> Any:

@@ -115,9 +115,32 @@ def _configurations(problem: PlanarProblem, configurations: Any) -> np.ndarray:
     return np.asarray(problem.timing.configurations, dtype=np.int64)
 
 
+def _stops(order: np.ndarray, stops: Any) -> list[tuple[int, int]]:
+    """The (from, to) subtasks of every leg: ``stops`` as given, else the closed tour."""
+    if stops is not None:
+        return [(int(a), int(b)) for a, b in stops]
+    n = len(order)
+    return [(int(order[k]), int(order[(k + 1) % n])) for k in range(n)]
+
+
+def report_stops(result: Result) -> tuple[PlanarProblem, list[tuple[int, int]], int | None]:
+    """The problem a planar result's report describes (with its home point, if any, as the
+    last subtask), the (from, to) subtasks of every leg the arm drives (an open path has no
+    return leg; a home starts and ends a tour), and the home's subtask index or None."""
+    report = result.report
+    problem = report.problem
+    home = problem.size - 1 if any(leg.start < 0 or leg.end < 0 for leg in report.legs) \
+        else None
+    pairs = [(home if leg.start < 0 else leg.start, home if leg.end < 0 else leg.end)
+             for leg in report.legs]
+    return problem, pairs, home  # type: ignore[return-value]
+
+
 def tour_legs(problem: PlanarProblem, order: Any, configurations: Any = None,
-              samples: int = 48) -> list[Any]:
-    """The legs of the closed tour as the arm drives them under the problem's time model.
+              samples: int = 48, *, stops: Any = None) -> list[Any]:
+    """The legs of the tour as the arm drives them under the problem's time model: the
+    closed tour through ``order``, or the legs ``stops`` lists ((from, to) subtasks, e.g.
+    an open path or a tour from a home, :func:`report_stops`).
 
     Each leg has ``index``, ``start``, ``end`` (subtasks), ``kind`` (``line``,
     ``joint`` or ``elbow`` for a joint move that changes elbow branch), ``xy``
@@ -134,13 +157,13 @@ def tour_legs(problem: PlanarProblem, order: Any, configurations: Any = None,
     q_both = problem.arm.ik(pts)  # (N, 2 branches, 2)
     moves = timing.moves(configs)
     check = timing.leg_check
-    n = len(order)
+    pairs = _stops(order, stops)
     if moves is None and check is not None:  # the tour's legs only, not all pairs
-        outside, ratio = check.legs(order, np.roll(order, -1))
+        outside, ratio = check.legs(np.array([a for a, _ in pairs], dtype=np.int64),
+                                    np.array([b for _, b in pairs], dtype=np.int64))
     s = np.linspace(0.0, 1.0, samples)[:, None]
     legs = []
-    for k in range(n):
-        a, b = int(order[k]), int(order[(k + 1) % n])
+    for k, (a, b) in enumerate(pairs):
         ca, cb = int(configs[a]), int(configs[b])
         straight = moves is None or int(moves[a, b]) == 1
         infeasible = False
@@ -233,8 +256,10 @@ def _inset(ax: Axes, problem: PlanarProblem, legs: list[Any],
 def plot_tour(problem: PlanarProblem, order: Any, *, ax: Axes | None = None,
               title: str | None = None, draw_arm: bool = True,
               configurations: Any = None, label_legs: bool | None = None,
-              inset: bool | Axes = True) -> Axes:
-    """Draw the closed tour over the subtasks, zoomed to them, as the arm drives it.
+              inset: bool | Axes = True, stops: Any = None, home: int | None = None) -> Axes:
+    """Draw the tour over the subtasks, zoomed to them, as the arm drives it: the closed
+    tour through ``order``, or the legs ``stops`` lists (an open path, a tour from a home:
+    :func:`report_stops`), ``home`` the subtask that is the home point (drawn as one).
 
     Args:
         problem: gives the points, the arm and the time model.
@@ -257,7 +282,8 @@ def plot_tour(problem: PlanarProblem, order: Any, *, ax: Axes | None = None,
     arm = problem.arm
     order = np.asarray(order, dtype=np.int64)
     configs = _configurations(problem, configurations)
-    legs = tour_legs(problem, order, configs)
+    legs = tour_legs(problem, order, configs, stops=stops)
+    first = legs[0].start if legs else int(order[0])
     extent = _zoom(pts, [leg.xy for leg in legs])
     plot_workspace(ax, arm, extent=extent)
     if draw_arm and len(pts) <= MAX_ARM_POSES:
@@ -291,10 +317,20 @@ def plot_tour(problem: PlanarProblem, order: Any, *, ax: Axes | None = None,
                 else "straight line the arm cannot drive as timed")
         ax.plot([], [], ls=(0, (2, 2)), color="tab:red", lw=2.2, marker="x",
                 label=f"{what} ({n_bad})")
-    ax.scatter(pts[:, 0], pts[:, 1], s=16 if len(pts) > 60 else 24, color="k", zorder=5,
-               label="subtask")
-    ax.scatter(pts[order[0], 0], pts[order[0], 1], s=110, facecolor="none",
-               edgecolor="tab:green", lw=2, zorder=6, label="first subtask")
+    visited = np.ones(len(pts), dtype=bool)
+    if home is not None:
+        visited[home] = False
+        ax.scatter(pts[home, 0], pts[home, 1], s=90, marker="s", color="tab:purple",
+                   zorder=6, label="home")
+    ax.scatter(pts[visited, 0], pts[visited, 1], s=16 if len(pts) > 60 else 24, color="k",
+               zorder=5, label="subtask")
+    if first != home:
+        ax.scatter(pts[first, 0], pts[first, 1], s=110, facecolor="none",
+                   edgecolor="tab:green", lw=2, zorder=6, label="first subtask")
+    if stops is not None and legs and legs[-1].end != first:
+        last = legs[-1].end
+        ax.scatter(pts[last, 0], pts[last, 1], s=110, marker="D", facecolor="none",
+                   edgecolor="tab:red", lw=1.6, zorder=6, label="last subtask (open path)")
     if label_legs is None:
         label_legs = len(pts) <= MAX_LABELLED_LEGS
     if label_legs:
@@ -305,8 +341,9 @@ def plot_tour(problem: PlanarProblem, order: Any, *, ax: Axes | None = None,
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     if title is None:
-        title = (f"{arm.name}, {problem.time_model} model, N = {len(pts)}: "
-                 f"{problem.tour_time(order):.3f} s")
+        title = f"{arm.name}, {problem.time_model} model, N = {int(visited.sum())}"
+        if stops is None:
+            title += f": {problem.tour_time(order):.3f} s"
     ax.set_title(title, fontsize=10)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7.5, frameon=False)
     zoomed = (extent[1] - extent[0]) < 1.5 * arm.r_max
@@ -390,6 +427,12 @@ def solution_figure(result: Result, problem: PlanarProblem) -> Figure:
 
     n = problem.size
     configs = result.report.configurations if result.report is not None else None
+    stops: list[tuple[int, int]] | None = None
+    home = None
+    drawn = problem
+    if result.report is not None and (result.constraints is not None and (
+            result.constraints.tour == "open" or result.constraints.home is not None)):
+        drawn, stops, home = report_stops(result)
     table = n > MAX_LABELLED_LEGS
     pts = problem.subtasks.points
     zoom = _zoom(pts, [])
@@ -400,16 +443,21 @@ def solution_figure(result: Result, problem: PlanarProblem) -> Figure:
     grid = fig.add_gridspec(2, len(ratios), width_ratios=ratios,
                             height_ratios=(1.0, 1.2) if table else (1.0, 1.0))
     tour_ax = fig.add_subplot(grid[:, 0])
-    plot_tour(problem, result.order, ax=tour_ax, configurations=configs,
-              inset=fig.add_subplot(grid[1, 1]) if zoomed else False)
+    plot_tour(drawn, result.order, ax=tour_ax, configurations=configs,
+              inset=fig.add_subplot(grid[1, 1]) if zoomed else False, stops=stops, home=home,
+              title=None if stops is None else
+              f"{problem.arm.name}, {problem.time_model} model, N = {n}: "
+              f"{result.total_time:.3f} s")
     right = len(ratios) - 1
     plot_convergence(result, ax=fig.add_subplot(grid[0, right] if table else grid[:, right]))
     if table:
         plot_order_table(fig.add_subplot(grid[1, right]), result.order)
-    t0 = problem.tour_time(np.arange(n))
+    shape = ("tour" if stops is None else "open path" if home is None
+             else "tour from home" if result.constraints.tour == "closed"  # type: ignore[union-attr]
+             else "open path from home")
+    t0 = f" (input order {problem.tour_time(np.arange(n)):.3f} s)" if stops is None else ""
     fig.suptitle(f"{problem.arm.name}: {n} subtasks, {problem.time_model} time model - "
-                 f"tour {result.total_time:.3f} s (input order {t0:.3f} s), "
-                 f"seed {result.seed}", fontsize=12)
+                 f"{shape} {result.total_time:.3f} s{t0}, seed {result.seed}", fontsize=12)
     fig.tight_layout()
     return fig
 

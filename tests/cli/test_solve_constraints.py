@@ -66,7 +66,6 @@ def _one_error_line(capsys) -> str:
     ("", ["--home", "9,9"], "home point (9, 9) is unreachable: is beyond the reach"),
     ("", ["--home", "0.3,0.3", "--first", "2"], "first=2 and a home contradict"),
     ("", ["--home", "1,2,3"], "--home takes a point X,Y"),
-    ("", ["--tour", "open", "--plot", "x.png"], "--plot draws closed tours"),
 ])
 def test_bad_shape_input_is_one_line_and_exit_2(tmp_path, capsys, lines, args,
                                                 message) -> None:
@@ -75,8 +74,6 @@ def test_bad_shape_input_is_one_line_and_exit_2(tmp_path, capsys, lines, args,
         prec = tmp_path / "p.txt"
         prec.write_text(lines)
         argv += ["--precedence", str(prec)]
-    if "--plot" in args:
-        argv[argv.index("x.png")] = str(tmp_path / "x.png")
     assert main(argv) == 2
     assert message in _one_error_line(capsys)
 
@@ -84,3 +81,44 @@ def test_bad_shape_input_is_one_line_and_exit_2(tmp_path, capsys, lines, args,
 def test_missing_precedence_file_is_exit_2(tmp_path, capsys) -> None:
     assert main([*BASE, "--precedence", str(tmp_path / "none.txt")]) == 2
     assert "none.txt" in _one_error_line(capsys)
+
+
+@pytest.mark.parametrize("shape", [["--tour", "open"], ["--home", "0.3,0.3"],
+                                   ["--home", "0.3,0.3", "--tour", "open"]])
+def test_plot_draws_open_paths_and_homes(tmp_path, shape) -> None:
+    png = tmp_path / "tour.png"
+    assert main([*BASE, *shape, "--plot", str(png)]) == 0
+    from PIL import Image
+
+    with Image.open(png) as image:
+        assert image.size[0] > 1000 and image.getextrema() != ((255, 255),) * 3
+
+
+@pytest.mark.parametrize(("tour", "home"), [("open", None), ("closed", (0.3, 0.3)),
+                                            ("open", (0.3, 0.3))])
+def test_the_drawn_legs_are_the_legs_the_report_drives(tour, home) -> None:
+    # oracle: the report's legs (an open path has no return leg; a home starts and ends
+    # the tour) and the points themselves at each drawn leg's ends
+    import subtask_opt as so
+    from subtask_opt.plotting.sequencing import report_stops, tour_legs
+
+    robot = so.load_robot("planar_2r")
+    problem = so.ArmProblem(so.builtin_case("square20", robot.model), robot,
+                            time_model="trapezoid")
+    result = so.solve(problem, seed=1, stop=so.MaxGenerations(30),
+                      constraints=so.TourConstraints(tour=tour, home=home))
+    drawn, stops, home_index = report_stops(result)
+    legs = tour_legs(drawn, result.order, result.report.configurations, stops=stops)
+    n = 20 + (home is not None) - (tour == "open")
+    assert len(legs) == len(result.report.legs) == n
+    pts = drawn.subtasks.points
+    for leg, reported in zip(legs, result.report.legs, strict=True):
+        assert (leg.start, leg.end) == tuple(home_index if v < 0 else v
+                                             for v in (reported.start, reported.end))
+        np.testing.assert_allclose(leg.xy[[0, -1]], pts[[leg.start, leg.end]], atol=1e-12)
+    if home is None:
+        assert home_index is None and legs[0].start != legs[-1].end
+    else:
+        np.testing.assert_allclose(pts[home_index], home)
+        assert legs[0].start == home_index and (legs[-1].end == home_index) == (
+            tour == "closed")
