@@ -366,6 +366,7 @@ def _plot(args: argparse.Namespace, problem: Any, result: Any, executed: Any) ->
         with output_file(args.plot) as tmp:
             save_solution_figure(result, problem.compiled, tmp)
     else:
+        from subtask_opt.plotting.cell_geometry import detour_legs
         from subtask_opt.plotting.serial import plot_serial_tour
 
         trajectory = executed[0]
@@ -375,7 +376,7 @@ def _plot(args: argparse.Namespace, problem: Any, result: Any, executed: Any) ->
             plot_serial_tour(serial.arm, serial.targets.points, trajectory.tool_positions(q),
                              result.leg_times, result.order, tmp,
                              title=_title(args, problem, result), q_home=serial.home,
-                             scene=serial.scene)
+                             scene=serial.scene, detours=detour_legs(trajectory))
     print(f"wrote {args.plot}")
 
 
@@ -400,6 +401,7 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
         print(f"wrote {args.animate}")
     if args.view:
         from subtask_opt.plotting.arm3d import write_tour_html
+        from subtask_opt.plotting.cell_geometry import detour_legs
 
         serial = problem.compiled
         times = trajectory.sample_times(0.01)
@@ -407,7 +409,8 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
         with output_file(args.view) as tmp:
             write_tour_html(tmp, serial.arm, times, q, targets=serial.targets.points,
                             axes=serial.targets.axes, scene=serial.scene, order=result.order,
-                            title=_title(args, problem, result))
+                            title=_title(args, problem, result),
+                            detours=detour_legs(trajectory))
         print(f"wrote {args.view}")
 
 
