@@ -162,6 +162,47 @@ def box_triangles(half_extents: Any) -> tuple[np.ndarray, np.ndarray]:
     return corners, np.array(tris, dtype=np.int64)
 
 
+def curved_sheet(center: Any = (0.5, 0.0, 0.05), size: Any = (0.3, 0.7),
+                 curvature: float = 0.6, thickness: float = 0.004,
+                 divisions: tuple[int, int] = (8, 16)) -> tuple[np.ndarray, np.ndarray]:
+    """A closed sheet bent about the y axis, as (V, 3) vertices and (T, 3) triangles.
+
+    Its top is ``z = cz + curvature (x - cx)^2`` over ``|x - cx| <= size[0] / 2``,
+    ``|y - cy| <= size[1] / 2``, its bottom ``thickness`` lower, the rims closed (a
+    part to drill, for examples and benchmarks; :func:`write_stl` writes it).
+    """
+    c = np.asarray(center, dtype=np.float64)
+    lx, ly = (float(v) for v in size)
+    nx, ny = divisions
+    if c.shape != (3,) or not np.all(np.isfinite(c)) or min(lx, ly) <= 0 or thickness <= 0:
+        raise ParameterError(f"curved_sheet: center must be 3 numbers and size, thickness "
+                             f"> 0, got {center!r}, {size!r}, {thickness!r}")
+    if not (isinstance(nx, int) and isinstance(ny, int) and 2 <= min(nx, ny)
+            and nx * ny <= 100_000):
+        raise ParameterError(f"curved_sheet: divisions must be two ints >= 2 with a product "
+                             f"<= 100000, got {divisions!r}")
+    xs, ys = np.linspace(-lx / 2, lx / 2, nx), np.linspace(-ly / 2, ly / 2, ny)
+    x, y = np.meshgrid(xs, ys, indexing="ij")
+    top = np.stack([x + c[0], y + c[1], c[2] + curvature * x ** 2], -1).reshape(-1, 3)
+    vertices = np.vstack([top, top - [0.0, 0.0, thickness]])
+    n = len(top)
+
+    def at(i: int, j: int) -> int:
+        return i * ny + j
+
+    tris = []
+    for i in range(nx - 1):
+        for j in range(ny - 1):
+            a, b, cc, d = at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)
+            tris += [(a, b, cc), (a, cc, d), (a + n, cc + n, b + n), (a + n, d + n, cc + n)]
+    rim = ([at(i, 0) for i in range(nx)] + [at(nx - 1, j) for j in range(1, ny)]
+           + [at(i, ny - 1) for i in range(nx - 2, -1, -1)]
+           + [at(0, j) for j in range(ny - 2, 0, -1)])
+    for a, b in zip(rim, rim[1:] + rim[:1], strict=True):
+        tris += [(a, a + n, b + n), (a, b + n, b)]
+    return vertices, np.array(tris, dtype=np.int64)
+
+
 def triangle_indices(geometry: Any) -> np.ndarray:
     """(T, 3) vertex indices of a coal BVH model's triangles."""
     out = np.empty((int(geometry.num_tris), 3), dtype=np.int64)
@@ -211,5 +252,5 @@ def load_mesh(path: Path, scale: np.ndarray) -> Any:
 
 
 __all__ = ["MAX_MESH_BYTES", "MAX_MESH_EXTENT", "MAX_MESH_TRIANGLES", "MIN_MESH_AREA",
-           "MIN_MESH_EXTENT", "Mesh", "box_triangles", "check_rotation", "load_mesh",
-           "triangle_indices", "write_stl"]
+           "MIN_MESH_EXTENT", "Mesh", "box_triangles", "check_rotation", "curved_sheet",
+           "load_mesh", "triangle_indices", "write_stl"]

@@ -300,3 +300,50 @@ def test_cli_takes_a_bare_mesh_as_the_scene(cell, capsys) -> None:
     out = capsys.readouterr()
     assert code == 0, out.err
     assert "detours off" in out.out
+
+
+def test_plan_after_sequencing_plans_exactly_the_colliding_straight_legs(solved, cell) -> None:
+    """RoboTSP's pipeline step (benchmarks/robotsp.py): the detoured tour driven straight
+    collides on its detoured legs; planning them after sequencing clears it."""
+    import subtask_opt as so
+    from subtask_opt.arm.serial_problem import evaluate_tour
+    from subtask_opt.papers.robotsp import plan_after
+
+    problem, result = solved[True]
+    serial = problem.compiled
+    straight = evaluate_tour(serial, result.order, result.report.configuration_index)
+    path = [straight.home, *straight.configurations[straight.order], straight.home]
+    hits = [k for k in range(len(path) - 1)
+            if serial.checker.leg_in_collision(path[k], path[k + 1], serial.clearance)]
+    assert hits and set(hits) == set(result.report.detours)
+    after = plan_after(serial, straight, seed=1, params=serial.detour)
+    assert sorted(after.detours) == hits and after.counts["legs_unplanned"] == 0
+    assert after.total_time == pytest.approx(float(after.leg_times.sum()))
+    for k, w in after.detours.items():  # each detour joins its leg's two ends
+        np.testing.assert_array_equal(w[0], path[k])
+        np.testing.assert_array_equal(w[-1], path[k + 1])
+    from subtask_opt.arm.trajectory import from_serial_report
+
+    trajectory = from_serial_report(after)
+    check = so.validate(trajectory)
+    assert check.ok and check.legs_in_collision == 0, check.violations
+    assert abs(trajectory.duration - after.total_time) <= 0.005 * after.total_time
+
+
+def test_curved_sheet_is_closed_and_on_its_parabola(tmp_path) -> None:
+    from subtask_opt.arm.meshes import Mesh, curved_sheet
+
+    v, t = curved_sheet((0.5, 0.1, 0.05), (0.3, 0.6), 0.6, thickness=0.004, divisions=(5, 7))
+    edges: dict[tuple[int, int], int] = {}
+    for tri in t:
+        for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+            edges[(min(a, b), max(a, b))] = edges.get((min(a, b), max(a, b)), 0) + 1
+    assert set(edges.values()) == {2}  # closed: every edge shared by two triangles
+    top = v[: len(v) // 2]
+    np.testing.assert_allclose(top[:, 2], 0.05 + 0.6 * (top[:, 0] - 0.5) ** 2)
+    np.testing.assert_allclose(v[len(v) // 2:, 2], top[:, 2] - 0.004)
+    assert np.ptp(top[:, 1]) == pytest.approx(0.6)
+    write_stl(tmp_path / "s.stl", v, t)
+    assert Mesh(name="s", file=tmp_path / "s.stl").geometry.num_tris == len(t)
+    with pytest.raises(ParameterError, match="divisions must be two ints"):
+        curved_sheet(divisions=(1, 5))
