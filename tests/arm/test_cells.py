@@ -347,3 +347,77 @@ def test_curved_sheet_is_closed_and_on_its_parabola(tmp_path) -> None:
     assert Mesh(name="s", file=tmp_path / "s.stl").geometry.num_tris == len(t)
     with pytest.raises(ParameterError, match="divisions must be two ints"):
         curved_sheet(divisions=(1, 5))
+
+
+_SUBPROCESS_SOLVE = """
+import json, sys
+import numpy as np
+import subtask_opt as so
+from subtask_opt.arm.detour import DetourParams
+from subtask_opt.arm.problem import ArmProblem, load_robot, load_targets
+cell, holes = sys.argv[1], sys.argv[2]
+targets = load_targets(holes, standoff=0.05, axis_step=45.0)
+problem = ArmProblem(targets, load_robot("ur5"), home=np.radians([0, -100, 100, -90, -90, 0]),
+                     scene=cell, detour=DetourParams(max_plans=20, attempts=1))
+result = so.solve(problem, seed=3)
+print(json.dumps({"order": [int(i) for i in result.order], "total": result.total_time,
+                  "detours": {str(k): w.tolist() for k, w in result.report.detours.items()}}))
+"""
+
+
+def test_same_seed_same_detoured_tour_across_processes(cell) -> None:
+    """Two fresh interpreters (different hash seeds) plan the same detours bit for bit.
+    (About 10 s: two processes, each its own IK, sweeps and plans.)"""
+    import os
+    import subprocess
+    import sys
+
+    answers = []
+    for hash_seed in ("1", "2"):
+        env = {**os.environ, "PYTHONHASHSEED": hash_seed,
+               "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+        run = subprocess.run([sys.executable, "-c", _SUBPROCESS_SOLVE, str(cell),
+                              str(cell.parent / "holes.csv")], capture_output=True, text=True,
+                             env=env, timeout=300, check=False)
+        assert run.returncode == 0, run.stderr[-2000:]
+        answers.append(json.loads(run.stdout.strip().splitlines()[-1]))
+    assert answers[0]["detours"], "the cell must need a detour for this test to mean anything"
+    assert answers[0] == answers[1]
+
+
+def test_batch_takes_detours_like_the_cli(cell, tmp_path, capsys) -> None:
+    import subtask_opt as so
+    from subtask_opt.arm.problem import ArmProblem, load_robot, load_targets
+    from subtask_opt.cli import main
+
+    holes = cell.parent / "holes.csv"
+    solo = so.solve(ArmProblem(load_targets(holes, standoff=STANDOFF), load_robot("ur5"),
+                               home=HOME, scene=cell, detours=False), seed=2)
+    home = "0,-100,100,-90,-90,0"
+    out = tmp_path / "b.json"
+    code = main(["batch", str(holes), "--robot", "ur5", "--home", home, "--scene", str(cell),
+                 "--standoff", str(STANDOFF), "--no-detours", "--workers", "0", "--seed", "2",
+                 "--json", str(out), "--no-progress"])
+    assert code == 0, capsys.readouterr().err
+    job = json.loads(out.read_text())["jobs"][0]
+    assert job["order"] == [int(i) for i in solo.order] and job["total_time"] == solo.total_time
+    # a manifest's job says it with "detours": false
+    manifest = tmp_path / "jobs.json"
+    entry = {"id": "a", "case": str(holes), "robot": "ur5", "home": [0, -100, 100, -90, -90, 0],
+             "scene": str(cell), "standoff": STANDOFF, "detours": False, "seed": 2}
+    manifest.write_text(json.dumps([entry]))
+    assert main(["batch", str(manifest), "--workers", "0", "--json", str(out),
+                 "--no-progress"]) == 0
+    assert json.loads(out.read_text())["jobs"][0]["total_time"] == solo.total_time
+    capsys.readouterr()
+    # refusals: one line, exit 2
+    planar = tmp_path / "planar.json"
+    planar.write_text(json.dumps([{"id": "p", "case": "square20", "detours": False}]))
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps([{**entry, "detours": "no"}]))
+    for argv, word in ((["batch", str(planar)], "Job.detours applies to serial arms only"),
+                       (["batch", str(bad)], "Job.detours must be true or false"),
+                       (["batch", str(manifest), "--no-detours"], "--no-detours applies to")):
+        assert main([*argv, "--json", str(tmp_path / "x.json"), "--workers", "0"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and word in err[0], err
