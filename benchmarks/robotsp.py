@@ -1,5 +1,11 @@
 """RoboTSP's drilling benchmark: ours beside RoboTSP's method, TSP C-space and LKH's GTSP.
 
+``robotsp_planned`` is RoboTSP's whole pipeline: its tour, then every straight leg that
+collides with the panel or the pedestal planned after sequencing (OMPL RRTConnect +
+simplification, :func:`subtask_opt.papers.robotsp.plan_after`); ours plans the legs its
+best tours use lazily inside the search. Each row's trajectory is validated (samples and
+every joint segment swept against the boxes: ``traj`` counts its legs in collision).
+
 Runs :func:`subtask_opt.papers.robotsp.run` on ``../shared/data/robotsp``
 (every subset, or ``--sizes 25,50``) and prints the table. The peers come from
 ``subtask_opt.tour.peers``; while that module is missing, ``--stand-in`` runs

@@ -234,7 +234,7 @@ class Joints:
 
 PLANAR_ONLY = ("time_model", "k", "elbow", "configurations", "line_fallback",
                "check_all_legs")
-SERIAL_ONLY = ("scene", "clearance", "ik_seed")
+SERIAL_ONLY = ("scene", "clearance", "ik_seed", "detours", "detour")
 
 
 @dataclass(frozen=True, eq=False)
@@ -256,6 +256,10 @@ class ArmProblem:
         k, elbow, configurations, line_fallback, check_all_legs: planar options (see
             :class:`~subtask_opt.arm.planar_problem.PlanarProblem`).
         clearance: (serial arms) leg sweep resolution in metres.
+        detours: (serial arms) plan legs in collision around the obstacles (OMPL,
+            :mod:`subtask_opt.arm.detour`); False forbids them.
+        detour: (serial arms) the planner's budgets, a
+            :class:`~subtask_opt.arm.detour.DetourParams` (default: its defaults).
         first: the target a planar closed tour starts at (default the first).
 
     Built on construction: IK, collision checks and leg times (``compiled``: the
@@ -275,6 +279,8 @@ class ArmProblem:
     check_all_legs: bool = False
     clearance: float = 0.01
     ik_seed: int = 0
+    detours: bool = True
+    detour: Any = None
     first: int | None = None
     compiled: Any = field(init=False, repr=False)
     # a planar home as the compiled problem takes it: the tip point and, for a home
@@ -345,8 +351,18 @@ class ArmProblem:
         scene = self.scene
         if isinstance(scene, (str, Path)):
             scene = Scene.load(scene)
+        if scene is not None and not isinstance(scene, Scene):
+            raise ParameterError(f"ArmProblem.scene must be a scene file or a Scene, got "
+                                 f"{type(scene).__name__}")
+        if scene is not None and scene.tool is not None:
+            loaded = self.robot._loaded
+            if loaded.get("tool_offset") is not None or loaded.get("tool_frame") is not None:
+                raise ParameterError("the scene's tool defines the TCP: load the robot "
+                                     "without tool_frame/tool_offset (--tool-frame), or "
+                                     "drop the scene's 'tool'")
         return SerialProblem(self.targets, self.robot.model, home, scene=scene,
-                             clearance=self.clearance, ik_seed=self.ik_seed)
+                             clearance=self.clearance, ik_seed=self.ik_seed,
+                             detours=self.detours, detour=self.detour)
 
     @property
     def size(self) -> int:

@@ -1,33 +1,56 @@
-"""Collision checking of a serial arm against boxes and itself (Pinocchio + coal).
+"""Collision checking of a serial arm against a cell and itself (Pinocchio + coal).
 
-A :class:`Scene` is a list of boxes read from JSON::
+A :class:`Scene` is read from JSON (version 2; a version-1 file, boxes only, is one)::
 
-    {"boxes": [{"name": "panel", "center": [x, y, z], "half_extents": [a, b, c],
-                "rotation": [[...], [...], [...]]}]}
+    {"boxes":  [{"name": "table", "center": [x, y, z], "half_extents": [a, b, c],
+                 "rotation": [[...], [...], [...]]}],
+     "meshes": [{"name": "part", "file": "part.stl", "scale": 1.0,
+                 "position": [x, y, z], "rotation": [[...], [...], [...]]}],
+     "tool":   {"frame": "tool0", "tcp": {"xyz": [0, 0, 0.15], "rpy": [0, 0, 0]},
+                "boxes": [...], "meshes": [...]},
+     "note":   "free text"}
 
-(``rotation`` optional: a 3x3 matrix whose columns are the box axes in the robot's
-base frame; other top-level keys such as ``"note"`` are ignored). Lengths in m.
+Every key is optional but the document needs one of ``boxes``, ``meshes``, ``tool``.
+``rotation`` is optional everywhere: a 3x3 matrix whose columns are the object's axes in
+its frame (the robot's base; the tool's frame for the tool's parts). Mesh files (STL, OBJ,
+DAE: whatever coal's ``MeshLoader`` reads, :mod:`subtask_opt.arm.meshes` for the limits)
+are paths relative to the scene file's folder, which they may not leave; ``scale`` is a
+number or three. ``note`` is free text, never read (the only key that means nothing);
+any other unknown key, at any level, is refused with one line naming it, as are missing
+files, non-orthonormal rotations and degenerate or huge meshes. :meth:`Scene.load` of a
+bare mesh file (``.stl``, ``.obj``, ``.dae``, ...) is a scene with that one mesh at the
+origin. Lengths in m.
+
+The ``tool`` attaches geometry to a robot frame (poses relative to that frame) and
+defines the TCP, the point and axes that reach the targets (``tcp``: ``xyz`` in m,
+``rpy`` in rad, roll-pitch-yaw about the frame's fixed x, y, z axes, as in a URDF):
+:meth:`Tool.mount` gives the arm whose tool frame is the TCP, so IK puts the TCP on every
+target and a standoff backs it off along the TCP's own z axis
+(:class:`~subtask_opt.arm.serial_problem.SerialProblem` mounts a scene's tool itself).
 
 :meth:`Scene.for_arm` binds it to a :class:`~subtask_opt.arm.serial.SerialArm`
 as a :class:`CollisionChecker`. The robot's geometry is the URDF's collision
 geometry (meshes resolved through the arm's package folders); a URDF with no
 collision geometry gets one capsule per link instead, from each joint origin to
-the next (radius ``link_radius``), and a tool capsule from the last joint to the
-tool point (radius ``tool_radius``, ending one radius short so its surface just
-reaches the tool point). Base-fixed geometry is checked for self-collision only
-(it cannot move relative to the boxes).
+the next (radius ``link_radius``), and, unless the scene's tool has geometry of its
+own, a tool capsule from the last joint to the tool point (radius ``tool_radius``,
+ending one radius short so its surface just reaches the tool point). Base-fixed
+geometry is checked for self-collision only (it cannot move relative to the scene).
 
 Self-collision pairs: every pair of robot geometries except those on the same
-joint, on a joint and its parent, and those already touching at the reference
+joint, on a joint and its parent, those already touching at the reference
 configuration (every joint at 0, clipped into its limits), the "adjacent" and
-"default" rules of MoveIt's setup assistant.
+"default" rules of MoveIt's setup assistant, and those the robot's SRDF disables
+where one lies beside the URDF (``srdf/<name>.srdf`` of example-robot-data).
+The tool's geometry is checked against the scene and against every robot link but the
+one it is mounted on (and any it touches at the reference configuration).
 
 Leg checks: :meth:`CollisionChecker.leg_in_collision` tests the straight joint
 line q0 -> q1 at ``n + 1`` evenly spaced configurations with
 ``n = ceil(sum_j R_j |q1_j - q0_j| / clearance)``, where R_j bounds the distance
-from joint j's axis to any point of the geometry it carries (for a revolute
-joint; 1 for a prismatic one). Between consecutive samples no point of the robot
-moves more than ``clearance``, so a collision the samples miss is one no deeper
+from joint j's axis to any point of the geometry it carries, the tool included (for
+a revolute joint; 1 for a prismatic one). Between consecutive samples no point of the
+robot moves more than ``clearance``, so a collision the samples miss is one no deeper
 than ``clearance`` (the bound is tested).
 """
 
@@ -41,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from subtask_opt.arm.meshes import Mesh, check_rotation
 from subtask_opt.arm.serial import SerialArm
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
 from subtask_opt.base.files import parse_json, read_text
@@ -102,74 +126,258 @@ class Box:
         return bool(np.all(np.abs(local) <= self.half_extents))
 
 
-@dataclass(frozen=True)
-class Scene:
-    """Box obstacles around an arm. Build it with :meth:`load` or :meth:`from_dict`."""
+@dataclass(frozen=True, eq=False)
+class Tool:
+    """Geometry mounted on a robot frame, and the tool centre point (TCP).
 
+    Attributes:
+        frame: the robot frame the tool is mounted on (e.g. ``tool0``).
+        tcp: 4x4 pose of the TCP in ``frame`` (identity: the frame itself).
+        boxes: boxes in ``frame`` (their ``center``/``rotation`` relative to it).
+        meshes: meshes in ``frame``.
+    """
+
+    frame: str
+    tcp: Any = None
     boxes: tuple[Box, ...] = ()
+    meshes: tuple[Mesh, ...] = ()
 
     def __post_init__(self) -> None:
-        names = [b.name for b in self.boxes]
-        if not all(isinstance(b, Box) for b in self.boxes):
-            raise ParameterError("Scene.boxes must hold Box objects")
+        if not isinstance(self.frame, str) or not self.frame:
+            raise ParameterError(f"Tool.frame must be a non-empty string, got {self.frame!r}")
+        tcp = np.eye(4) if self.tcp is None else np.array(self.tcp, dtype=np.float64)
+        if (tcp.shape != (4, 4) or not np.all(np.isfinite(tcp))
+                or np.abs(tcp[3] - [0, 0, 0, 1]).max() > 0
+                or np.abs(tcp[:3, :3].T @ tcp[:3, :3] - np.eye(3)).max() > _ROT_TOL
+                or abs(np.linalg.det(tcp[:3, :3]) - 1.0) > _ROT_TOL):
+            raise ParameterError(f"Tool.tcp must be a 4x4 rigid transform, got {self.tcp!r}")
+        tcp.setflags(write=False)
+        object.__setattr__(self, "tcp", tcp)
+        _check_parts("Tool", self.boxes, self.meshes)
+        object.__setattr__(self, "boxes", tuple(self.boxes))
+        object.__setattr__(self, "meshes", tuple(self.meshes))
+
+    @property
+    def has_geometry(self) -> bool:
+        """Whether the tool has boxes or meshes of its own."""
+        return bool(self.boxes or self.meshes)
+
+    def mount(self, arm: SerialArm) -> SerialArm:
+        """``arm`` with a new tool frame at the TCP (child of :attr:`frame`).
+
+        Raises:
+            InputDataError: the arm has no frame :attr:`frame`, or it is fixed to the base.
+        """
+        import pinocchio as pin
+
+        model = arm.model
+        if not model.existFrame(self.frame):
+            names = [f.name for f in model.frames if f.parentJoint > 0]
+            raise InputDataError(f"the scene's tool frame {self.frame!r} is not a frame of "
+                                 f"{arm.name}; frames on the arm: {', '.join(names[-6:])}")
+        parent_id = int(model.getFrameId(self.frame))
+        parent = model.frames[parent_id]
+        if parent.parentJoint == 0:
+            raise InputDataError(f"the scene's tool frame {self.frame!r} is fixed to the base "
+                                 f"of {arm.name}; mount the tool on a frame the arm moves")
+        model = pin.Model(model)  # a copy: the arm given keeps its frames
+        name = TCP_FRAME_NAME
+        while model.existFrame(name):
+            name += "_"
+        model.addFrame(pin.Frame(name, parent.parentJoint, parent_id,
+                                 parent.placement * pin.SE3(self.tcp), pin.FrameType.OP_FRAME))
+        return SerialArm(name=arm.name, model=model, urdf_path=arm.urdf_path,
+                         package_dirs=arm.package_dirs, locked_joints=arm.locked_joints,
+                         tool_frame=name, limits=arm.limits)
+
+
+TCP_FRAME_NAME = "tcp"
+"""Name of the frame :meth:`Tool.mount` adds (``tcp_``, ... if the model has one)."""
+
+
+def _check_parts(owner: str, boxes: Any, meshes: Any) -> None:
+    if not all(isinstance(b, Box) for b in boxes):
+        raise ParameterError(f"{owner}.boxes must hold Box objects")
+    if not all(isinstance(m, Mesh) for m in meshes):
+        raise ParameterError(f"{owner}.meshes must hold Mesh objects")
+    for what, items in (("boxes", boxes), ("meshes", meshes)):
+        names = [b.name for b in items]
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
-            raise ParameterError(f"Scene.boxes: names must be unique, repeated: {dup}")
+            raise ParameterError(f"{owner}.{what}: names must be unique, repeated: {dup}")
+
+
+MESH_SUFFIXES = (".stl", ".obj", ".dae", ".ply", ".off", ".3ds", ".fbx", ".gltf", ".glb")
+"""File suffixes :meth:`Scene.load` reads as a bare mesh rather than a JSON scene."""
+_TOP_KEYS = ("boxes", "meshes", "tool", "note")
+_BOX_KEYS = ("name", "center", "half_extents", "rotation")
+_MESH_KEYS = ("name", "file", "scale", "position", "rotation")
+_TOOL_KEYS = ("frame", "tcp", "boxes", "meshes")
+
+
+def _refuse_unknown(label: str, item: dict[str, Any], allowed: tuple[str, ...]) -> None:
+    unknown = sorted(set(item) - set(allowed))
+    if unknown:
+        raise InputDataError(f"{label} has unknown field(s) {unknown}; allowed: "
+                             f"{', '.join(allowed)}")
+
+
+def _list_of_objects(label: str, doc: dict[str, Any], key: str) -> list[dict[str, Any]]:
+    items = doc.get(key, [])
+    if not isinstance(items, list):
+        raise InputDataError(f"{label}: {key!r} must be a list, got {type(items).__name__}")
+    for i, item in enumerate(items):
+        if not isinstance(item, dict):
+            raise InputDataError(f"{label}: {key}[{i}] must be an object")
+    return items
+
+
+def _parse_box(label: str, item: dict[str, Any], i: int) -> Box:
+    _refuse_unknown(label, item, _BOX_KEYS)
+    for key in ("center", "half_extents"):
+        if key not in item:
+            raise InputDataError(f"{label} lacks the field {key!r}")
+    name = item.get("name", f"box{i}")
+    if not isinstance(name, str) or not name:
+        raise InputDataError(f"{label}.name must be a non-empty string, got {name!r}")
+    center = _vector(f"{label}.center", item["center"])
+    half = _vector(f"{label}.half_extents", item["half_extents"], positive=True)
+    rot = np.eye(3)
+    if item.get("rotation") is not None:
+        rot = check_rotation(f"{label}.rotation", item["rotation"])
+    return Box(name=name, center=center, half_extents=half, rotation=rot)
+
+
+def _parse_mesh(label: str, item: dict[str, Any], i: int, folder: Path | None) -> Mesh:
+    _refuse_unknown(label, item, _MESH_KEYS)
+    if "file" not in item:
+        raise InputDataError(f"{label} lacks the field 'file'")
+    name = item.get("name", f"mesh{i}")
+    if not isinstance(name, str) or not name:
+        raise InputDataError(f"{label}.name must be a non-empty string, got {name!r}")
+    file = item["file"]
+    if not isinstance(file, str) or not file or "\x00" in file:
+        raise InputDataError(f"{label}.file must be a path, got {file!r}")
+    if "://" in file or Path(file).is_absolute():
+        raise InputDataError(f"{label}.file {file!r} is refused: mesh files are paths "
+                             "relative to the scene file's folder")
+    base = (folder if folder is not None else Path.cwd()).resolve()
+    path = (base / file).resolve()
+    if not path.is_relative_to(base):
+        raise InputDataError(f"{label}.file {file!r} leaves the scene file's folder {base}")
+    if not path.exists():
+        raise InputDataError(f"{label}.file: mesh file not found: {base / file}")
+    scale = item.get("scale", 1.0)
+    if isinstance(scale, list):
+        scale_ok = len(scale) == 3 and all(isinstance(v, (int, float)) and not isinstance(
+            v, bool) for v in scale)
+    else:
+        scale_ok = isinstance(scale, (int, float)) and not isinstance(scale, bool)
+    if not scale_ok or not np.all(np.isfinite(scale)) or np.any(np.asarray(scale) <= 0):
+        raise InputDataError(f"{label}.scale must be a number > 0 or three, got {scale!r}")
+    position = (_vector(f"{label}.position", item["position"]) if "position" in item
+                else np.zeros(3))
+    rot = np.eye(3)
+    if item.get("rotation") is not None:
+        rot = check_rotation(f"{label}.rotation", item["rotation"])
+    try:
+        return Mesh(name=name, file=path, scale=scale, position=position, rotation=rot)
+    except InputDataError as exc:
+        raise InputDataError(f"{label}: {exc}") from None
+
+
+def _parse_tcp(label: str, value: Any) -> np.ndarray:
+    import pinocchio as pin
+
+    if not isinstance(value, dict):
+        raise InputDataError(f"{label} must be an object {{\"xyz\": [...], \"rpy\": [...]}}, "
+                             f"got {value!r}")
+    _refuse_unknown(label, value, ("xyz", "rpy"))
+    xyz = _vector(f"{label}.xyz", value["xyz"]) if "xyz" in value else np.zeros(3)
+    rpy = _vector(f"{label}.rpy", value["rpy"]) if "rpy" in value else np.zeros(3)
+    if np.abs(rpy).max() > 4 * math.pi:
+        raise InputDataError(f"{label}.rpy must be angles in radians within "
+                             f"[-4 pi, 4 pi], got {rpy.tolist()}")
+    tcp = np.eye(4)
+    tcp[:3, :3] = pin.rpy.rpyToMatrix(*rpy)
+    tcp[:3, 3] = xyz
+    return tcp
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """The cell around an arm: boxes and meshes in its base frame, and an optional tool.
+
+    Build it with :meth:`load` or :meth:`from_dict` (or directly from :class:`Box`,
+    :class:`~subtask_opt.arm.meshes.Mesh` and :class:`Tool` objects).
+    """
+
+    boxes: tuple[Box, ...] = ()
+    meshes: tuple[Mesh, ...] = ()
+    tool: Tool | None = None
+
+    def __post_init__(self) -> None:
+        _check_parts("Scene", self.boxes, self.meshes)
+        if self.tool is not None and not isinstance(self.tool, Tool):
+            raise ParameterError(f"Scene.tool must be a Tool or None, got "
+                                 f"{type(self.tool).__name__}")
         object.__setattr__(self, "boxes", tuple(self.boxes))
+        object.__setattr__(self, "meshes", tuple(self.meshes))
 
     @classmethod
-    def from_dict(cls, doc: Any, source: str = "scene") -> Scene:
-        """A scene from a parsed JSON document; InputDataError naming the bad field."""
-        if not isinstance(doc, dict) or "boxes" not in doc:
-            raise InputDataError(f"{source} must be a JSON object with a 'boxes' list")
-        items = doc["boxes"]
-        if not isinstance(items, list):
-            raise InputDataError(f"{source}: 'boxes' must be a list, got {type(items).__name__}")
-        boxes = []
-        for i, item in enumerate(items):
-            label = f"{source}: boxes[{i}]"
-            if not isinstance(item, dict):
+    def from_dict(cls, doc: Any, source: str = "scene", folder: str | Path | None = None
+                  ) -> Scene:
+        """A scene from a parsed JSON document; InputDataError naming the bad field.
+
+        ``folder``: where relative mesh paths start (default the current folder).
+        """
+        if not isinstance(doc, dict) or not any(k in doc for k in ("boxes", "meshes", "tool")):
+            raise InputDataError(f"{source} must be a JSON object with 'boxes', 'meshes' "
+                                 "and/or 'tool'")
+        _refuse_unknown(source, doc, _TOP_KEYS)
+        if "note" in doc and not isinstance(doc["note"], str):
+            raise InputDataError(f"{source}: 'note' must be a string (free text), got "
+                                 f"{type(doc['note']).__name__}")
+        where = Path(folder) if folder is not None else None
+        boxes = [_parse_box(f"{source}: boxes[{i}]", item, i)
+                 for i, item in enumerate(_list_of_objects(source, doc, "boxes"))]
+        meshes = [_parse_mesh(f"{source}: meshes[{i}]", item, i, where)
+                  for i, item in enumerate(_list_of_objects(source, doc, "meshes"))]
+        tool = None
+        if "tool" in doc:
+            spec = doc["tool"]
+            label = f"{source}: tool"
+            if not isinstance(spec, dict):
                 raise InputDataError(f"{label} must be an object")
-            unknown = sorted(set(item) - {"name", "center", "half_extents", "rotation"})
-            if unknown:
-                raise InputDataError(f"{label} has unknown field(s) {unknown}; allowed: name, "
-                                     "center, half_extents, rotation")
-            for field in ("center", "half_extents"):
-                if field not in item:
-                    raise InputDataError(f"{label} lacks the field {field!r}")
-            name = item.get("name", f"box{i}")
-            if not isinstance(name, str) or not name:
-                raise InputDataError(f"{label}.name must be a non-empty string, got {name!r}")
-            center = _vector(f"{label}.center", item["center"])
-            half = _vector(f"{label}.half_extents", item["half_extents"], positive=True)
-            rot = np.eye(3)
-            if item.get("rotation") is not None:
-                value = item["rotation"]
-                try:
-                    rot = np.array(value, dtype=np.float64)
-                except (TypeError, ValueError):
-                    raise InputDataError(f"{label}.rotation must be a 3x3 matrix of numbers, "
-                                         f"got {value!r}") from None
-                if rot.shape != (3, 3) or not np.all(np.isfinite(rot)):
-                    raise InputDataError(f"{label}.rotation must be a finite 3x3 matrix, "
-                                         f"got {value!r}")
-                if (np.abs(rot.T @ rot - np.eye(3)).max() > _ROT_TOL
-                        or abs(np.linalg.det(rot) - 1.0) > _ROT_TOL):
-                    raise InputDataError(f"{label}.rotation must be a rotation (orthonormal "
-                                         f"columns, det +1), got {value!r}")
-            boxes.append(Box(name=name, center=center, half_extents=half, rotation=rot))
+            _refuse_unknown(label, spec, _TOOL_KEYS)
+            frame = spec.get("frame")
+            if not isinstance(frame, str) or not frame or not frame.isprintable():
+                raise InputDataError(f"{label}.frame must name a robot frame, got {frame!r}")
+            tcp = _parse_tcp(f"{label}.tcp", spec["tcp"]) if "tcp" in spec else np.eye(4)
+            tool_boxes = [_parse_box(f"{label}.boxes[{i}]", item, i)
+                          for i, item in enumerate(_list_of_objects(label, spec, "boxes"))]
+            tool_meshes = [_parse_mesh(f"{label}.meshes[{i}]", item, i, where)
+                           for i, item in enumerate(_list_of_objects(label, spec, "meshes"))]
+            try:
+                tool = Tool(frame=frame, tcp=tcp, boxes=tuple(tool_boxes),
+                            meshes=tuple(tool_meshes))
+            except ParameterError as exc:
+                raise InputDataError(f"{source}: {exc}") from None
         try:
-            return cls(boxes=tuple(boxes))
+            return cls(boxes=tuple(boxes), meshes=tuple(meshes), tool=tool)
         except ParameterError as exc:
             raise InputDataError(f"{source}: {exc}") from None
 
     @classmethod
     def load(cls, path: str | Path) -> Scene:
-        """Read a scene JSON file (UTF-8, BOM accepted, at most 8 MiB)."""
+        """Read a scene JSON file (UTF-8, BOM accepted, at most 8 MiB), or a bare mesh file
+        (a suffix of :data:`MESH_SUFFIXES`) as a scene of that one mesh at the origin."""
         path = Path(path)
+        if path.suffix.lower() in MESH_SUFFIXES:
+            return cls(meshes=(Mesh(name=path.stem or "mesh", file=path),))
         text = read_text(path, "scene file", max_bytes=MAX_SCENE_BYTES)  # regular files only
         doc = parse_json(text, f"scene file {path}")  # depth-limited: no RecursionError
-        return cls.from_dict(doc, source=f"scene file {path.name}")
+        return cls.from_dict(doc, source=f"scene file {path.name}", folder=path.parent)
 
     def for_arm(self, arm: SerialArm, **kwargs: Any) -> CollisionChecker:
         """A :class:`CollisionChecker` of ``arm`` in this scene (kwargs as its constructor)."""
@@ -222,18 +430,26 @@ class CollisionChecker:
         self.scene = scene if scene is not None else Scene()
         self.margin = float(margin)
         model = arm.model
+        tool = self.scene.tool
         geom = self._urdf_geometry()
         self.uses_capsules = geom.ngeoms == 0
         if self.uses_capsules:
-            geom = self._capsule_geometry(link_radius, tool_radius)
+            geom = self._capsule_geometry(link_radius, tool_radius,
+                                          tool is None or not tool.has_geometry)
         robot_ids = list(range(geom.ngeoms))
+        tool_ids = [geom.addGeometryObject(obj) for obj in self._tool_objects()]
         box_ids = []
         for box in self.scene.boxes:
             obj = pin.GeometryObject(f"box:{box.name}", 0, 0, pin.SE3(box.rotation, box.center),
                                      _coal_box(2.0 * box.half_extents))
             box_ids.append(geom.addGeometryObject(obj))
+        for mesh in self.scene.meshes:
+            obj = pin.GeometryObject(f"mesh:{mesh.name}", 0, 0,
+                                     pin.SE3(mesh.rotation, mesh.position), mesh.geometry)
+            box_ids.append(geom.addGeometryObject(obj))
         self.geometry_model = geom
         self.robot_geometry_names = [geom.geometryObjects[i].name for i in robot_ids]
+        self.tool_geometry_names = [geom.geometryObjects[i].name for i in tool_ids]
 
         parents = model.parents
         q_ref = np.clip(np.zeros(arm.nq), arm.limits.lower, arm.limits.upper)
@@ -252,7 +468,18 @@ class CollisionChecker:
                     if self._pair_collides(ref_data, a, b):
                         continue
                     pairs.append((a, b))
-        for a in robot_ids:
+        if self_collision:
+            srdf_off = self._srdf_disabled()
+            pairs = [(a, b) for a, b in pairs
+                     if frozenset((self._link_of(a), self._link_of(b))) not in srdf_off]
+            # the tool against every robot link but the one it is mounted on
+            for a in tool_ids:
+                for b in robot_ids:
+                    if geom.geometryObjects[b].parentJoint == geom.geometryObjects[a].parentJoint:
+                        continue
+                    if not self._pair_collides(ref_data, a, b):
+                        pairs.append((b, a))
+        for a in robot_ids + tool_ids:
             if geom.geometryObjects[a].parentJoint == 0:
                 continue
             for b in box_ids:
@@ -266,6 +493,7 @@ class CollisionChecker:
 
     def __repr__(self) -> str:
         return (f"CollisionChecker({self.arm.name!r}, boxes={len(self.scene.boxes)}, "
+                f"meshes={len(self.scene.meshes)}, tool parts={len(self.tool_geometry_names)}, "
                 f"pairs={len(self.collision_pairs)}, capsules={self.uses_capsules})")
 
     # -- construction helpers
@@ -303,7 +531,59 @@ class CollisionChecker:
         names = [n for n in list(full.names) if n not in locked]
         return names[reduced_id]
 
-    def _capsule_geometry(self, link_radius: float, tool_radius: float) -> Any:
+    def _tool_objects(self) -> list[Any]:
+        """The scene's tool parts as geometry objects on the joint that carries its frame."""
+        import pinocchio as pin
+
+        tool = self.scene.tool
+        if tool is None:
+            return []
+        model = self.arm.model
+        if not model.existFrame(tool.frame):
+            raise InputDataError(f"the scene's tool frame {tool.frame!r} is not a frame of "
+                                 f"{self.arm.name}")
+        frame = model.frames[model.getFrameId(tool.frame)]
+        if frame.parentJoint == 0:
+            raise InputDataError(f"the scene's tool frame {tool.frame!r} is fixed to the base "
+                                 f"of {self.arm.name}; mount the tool on a frame the arm moves")
+        out = []
+        for box in tool.boxes:
+            out.append(pin.GeometryObject(f"tool:{box.name}", int(frame.parentJoint), 0,
+                                          frame.placement * pin.SE3(box.rotation, box.center),
+                                          _coal_box(2.0 * box.half_extents)))
+        for mesh in tool.meshes:
+            out.append(pin.GeometryObject(f"tool:{mesh.name}", int(frame.parentJoint), 0,
+                                          frame.placement * pin.SE3(mesh.rotation,
+                                                                    mesh.position),
+                                          mesh.geometry))
+        return out
+
+    def _link_of(self, geometry_id: int) -> str:
+        """The URDF link a robot geometry belongs to (its name without pinocchio's suffix)."""
+        name = self.geometry_model.geometryObjects[geometry_id].name
+        return name.rsplit("_", 1)[0] if name.rsplit("_", 1)[-1].isdigit() else name
+
+    def _srdf_disabled(self) -> set[frozenset[str]]:
+        """Link pairs the robot's SRDF disables (``srdf/<stem>.srdf`` beside the URDF's
+        folder, as example-robot-data lays them out); empty without one."""
+        import xml.etree.ElementTree as ET
+
+        urdf = self.arm.urdf_path
+        stems = dict.fromkeys([urdf.stem, urdf.stem.removesuffix("_robot")])
+        candidates = [urdf.parent.parent / "srdf" / f"{stem}.srdf" for stem in stems] + [
+            urdf.with_suffix(".srdf")]
+        path = next((c for c in candidates if c.is_file()), None)
+        if path is None or self.uses_capsules:
+            return set()
+        try:
+            root = ET.parse(str(path)).getroot()
+        except (OSError, ET.ParseError) as exc:
+            raise InputDataError(f"cannot read the SRDF {path}: {exc}") from None
+        return {frozenset((d.get("link1", ""), d.get("link2", "")))
+                for d in root.iter("disable_collisions")}
+
+    def _capsule_geometry(self, link_radius: float, tool_radius: float,
+                          tool_capsule: bool = True) -> Any:
         import coal
         import pinocchio as pin
 
@@ -325,7 +605,7 @@ class CollisionChecker:
         tool = model.frames[self.arm.tool_frame_id]
         tip = np.array(tool.placement.translation)
         length = float(np.linalg.norm(tip))
-        if length > tool_radius:
+        if tool_capsule and length > tool_radius:
             end = tip * (length - tool_radius) / length
             placement, half = _capsule_placement(np.zeros(3), end)
             geom.addGeometryObject(pin.GeometryObject(
@@ -351,7 +631,7 @@ class CollisionChecker:
         rho = np.zeros(model.njoints)  # bounding-sphere radius about each joint origin
         for obj in self.geometry_model.geometryObjects:
             j = obj.parentJoint
-            if obj.name.startswith("box:"):
+            if obj.parentJoint == 0:
                 continue
             g = obj.geometry
             g.computeLocalAABB()
@@ -385,6 +665,15 @@ class CollisionChecker:
         import pinocchio as pin
 
         q = self.arm.check_q(q)
+        data, gdata = self._state()
+        return bool(pin.computeCollisions(self.arm.model, data, self.geometry_model, gdata, q,
+                                          True))
+
+    def collides_fast(self, q: np.ndarray) -> bool:
+        """:meth:`in_collision` without checking q (a float64 (nq,) array within the
+        limits: the planner's validity callback, called thousands of times a plan)."""
+        import pinocchio as pin
+
         data, gdata = self._state()
         return bool(pin.computeCollisions(self.arm.model, data, self.geometry_model, gdata, q,
                                           True))

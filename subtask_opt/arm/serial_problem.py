@@ -11,14 +11,18 @@ together (a generalised TSP on the shared micro-GA core, decoded exactly by a
 layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
 home -> targets -> home.
 
-Legs are checked for collisions lazily: after a search, every leg of the
-answer is swept (:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision`
-with the problem's clearance); a leg in collision is marked *infeasible* (a
-large finite penalty, so the GA avoids it) and the same order is decoded again
-and polished, until the answer uses only collision-free legs; then the GA runs
-once more knowing those legs and the shorter answer is kept
-(:func:`solve_serial_problem`). Detours through via configurations are not attempted
-(``legs_detoured`` is always 0).
+Legs are checked for collisions lazily, as GLNS's lazy-edge search evaluates only the
+edges its best tour uses: the straight legs' times are lower bounds of every leg; after a
+search, every leg of the answer not checked before is swept
+(:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision` with the problem's
+clearance); a leg in collision is planned around the obstacles
+(:func:`~subtask_opt.arm.detour.plan_detour`: OMPL's RRTConnect, simplified, timed
+through its waypoints) and its cost becomes the detour's time, or, when the planner fails
+or its budget (``DetourParams.max_plans`` per solve) is spent, or ``detours=False``, it is
+marked *infeasible* (a large finite penalty, so the GA avoids it). The same order is then
+decoded again on the corrected costs and polished, until the answer uses only verified
+legs (free straight legs and planned detours); then the GA runs once more knowing those
+legs and the shorter answer is kept (:func:`solve_serial_problem`).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal profiles of the same straight lines with the arm's jerk limits
@@ -62,6 +66,7 @@ from subtask_opt.tour.constraints import Canonical, TourConstraints
 from subtask_opt.tour.solve import Result
 
 if TYPE_CHECKING:
+    from subtask_opt.arm.detour import Detour, DetourParams
     from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import PoseTargets
     from subtask_opt.arm.scene import CollisionChecker, Scene
@@ -110,6 +115,12 @@ class SerialProblem:
             than this between two checked configurations.
         check_collisions: check configurations and legs at all.
         ik_seed: seed of the IK's random starts.
+        detours: plan a leg in collision around the obstacles (False: forbid it).
+        detour: the planner's budgets (default :class:`~subtask_opt.arm.detour.DetourParams`).
+
+    A scene with a ``tool`` mounts it (:meth:`~subtask_opt.arm.scene.Tool.mount`): ``arm``
+    becomes the given arm with its tool frame at the tool's TCP, which then reaches the
+    targets (the given arm's own tool frame is not used).
 
     Built on construction (read-only): ``configurations`` (per target, (K_i, n)),
     ``offsets``, ``flat`` (M, n), ``legs`` (M, M, symmetric), ``home_out``/``home_in``
@@ -132,6 +143,8 @@ class SerialProblem:
     clearance: float = 0.01
     check_collisions: bool = True
     ik_seed: int = 0
+    detours: bool = True
+    detour: DetourParams | None = None
     configurations: tuple[np.ndarray, ...] = field(init=False, repr=False)
     offsets: np.ndarray = field(init=False, repr=False)
     flat: np.ndarray = field(init=False, repr=False)
@@ -166,6 +179,15 @@ class SerialProblem:
             raise ParameterError(f"SerialProblem.arm must be a SerialArm, got "
                                  f"{type(self.arm).__name__}")
         require_in_range("SerialProblem", "clearance", self.clearance, 1e-4, 1.0)
+        from subtask_opt.arm.detour import DetourParams
+
+        if not isinstance(self.detours, bool):
+            raise ParameterError(f"SerialProblem.detours must be a bool, got {self.detours!r}")
+        if self.detour is not None and not isinstance(self.detour, DetourParams):
+            raise ParameterError(f"SerialProblem.detour must be DetourParams or None, got "
+                                 f"{self.detour!r}")
+        if self.scene is not None and self.scene.tool is not None:
+            object.__setattr__(self, "arm", self.scene.tool.mount(self.arm))
         arm = self.arm
         home = np.asarray(self.home, dtype=np.float64)
         if home.shape != (arm.nq,) or not np.all(np.isfinite(home)):
@@ -276,15 +298,19 @@ class SerialReport(ArmReport):
         planned_leg_times: (N + 1,) the same legs' planned times (the search's model).
         total_time: sum of ``leg_times`` (s).
         collision_checked: whether configurations and the tour's legs were checked.
-        counts: targets, configurations per target, legs checked, legs infeasible,
-            legs detoured, configurations dropped in collision, search rounds (of the
-            lazy leg check) and how many of them ran the GA.
+        counts: targets, configurations per target, legs checked, legs infeasible (in
+            collision as straight lines), legs planned (``legs_planned``, of
+            ``plan_budget``; ``legs_plan_found`` succeeded), legs detoured (in this
+            tour), configurations dropped in collision, search rounds (of the lazy leg
+            check) and how many of them ran the GA.
         cpu: CPU seconds of IK, collision checks, matrix, search, and apart from them
             numba's compilation (or loading compiled code) on a first run.
         generations, restarts: what the micro-GA did (summed over rounds).
         seed: the seed.
         open_path: the tour ends at its last target (no leg back home).
         problem: the problem the tour belongs to (for :func:`subtask_opt.trajectory`).
+        detours: leg index -> (k, n) waypoints (both ends included, in driving order) of
+            each leg planned around an obstacle; the other legs are straight.
     """
 
     order: np.ndarray
@@ -302,6 +328,7 @@ class SerialReport(ArmReport):
     seed: int
     open_path: bool = False
     problem: Any = field(default=None, repr=False, compare=False)
+    detours: dict[int, np.ndarray] = field(default_factory=dict, repr=False)
 
     time_model = "joint"
     configurations_mode = "optimize"  # one of every target's IK solutions, chosen
@@ -336,9 +363,12 @@ class SerialReport(ArmReport):
         return [
             f"{sum(per)} configurations ({min(per)}-{max(per)} per target); executed "
             f"{self.total_time:.4f} s (ruckig), planned {self.planned_time:.4f} s",
-            f"legs checked {c['legs_checked']}, infeasible {c['legs_infeasible']}, "
-            f"detoured {c['legs_detoured']}" + ("" if self.collision_checked
-                                                 else " (collisions not checked)"),
+            f"legs checked {c['legs_checked']}, in collision {c['legs_infeasible']}, "
+            f"detoured {c['legs_detoured']}" + (
+                f" (planned {c['legs_planned']} of budget {c['plan_budget']}, found "
+                f"{c['legs_plan_found']}, planner {self.cpu.get('planner', 0.0):.3f} s CPU)"
+                if c.get("detours") else " (detours off)" if "detours" in c else "")
+            + ("" if self.collision_checked else " (collisions not checked)"),
             f"CPU: {cpu}",
         ]
 
@@ -385,6 +415,7 @@ class SerialReport(ArmReport):
             "restarts": self.restarts,
             "seed": self.seed,
             "open_path": self.open_path,
+            "detours": {str(k): w.tolist() for k, w in sorted(self.detours.items())},
             "units": {"time": "s", "joints": "rad"},
         }
 
@@ -545,8 +576,11 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     from subtask_opt.tour.solve import PINNED_STALL, _relaxation_bound, _rotate
 
     n = problem.size
+    from subtask_opt.arm.detour import DetourParams, plan_detour
+
     cpu = dict(problem.cpu)
     cpu["search"] = 0.0
+    cpu["planner"] = 0.0
     penalty = problem.penalty
     search = SEARCH_PAPER if params.preset == "paper" else SEARCH_FAST
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
@@ -554,6 +588,9 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                       convergence_tol=params.convergence_tol)
     off = problem.offsets
     checked: dict[tuple[int, int], bool] = {}  # (from, to) flat index, -1 = home -> collides
+    detours: dict[tuple[int, int], Detour] = {}  # legs in collision planned around (lo -> hi)
+    detour_params = problem.detour if problem.detour is not None else DetourParams()
+    planner = {"plans": 0}
     generations = restarts = 0
     rounds = ga_rounds = repairs = 0
     t0 = time.process_time()
@@ -652,25 +689,42 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                 "home or fewer obstacles")
         repair = False
         t0 = time.process_time()
+        spent = 0.0  # CPU of the planner inside this loop (not collision checking)
         for a, b in zip(tour[:-1], tour[1:], strict=True):
             if problem.checker is None:
                 break
             key = (min(a, b), max(a, b))
-            if key not in checked:
-                qa = problem.home if a < 0 else problem.flat[a]
-                qb = problem.home if b < 0 else problem.flat[b]
-                checked[key] = problem.checker.leg_in_collision(qa, qb, problem.clearance)
-            if checked[key]:
-                repair = True
-                if a < 0 or b < 0:
-                    data.home_out[max(a, b)] = data.home_in[max(a, b)] = penalty
-                else:
-                    blocked.setdefault(key, float(data.legs[key]))
-                    data.legs[a, b] = data.legs[b, a] = penalty
-                    ta, tb = owner[a], owner[b]
-                    block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
-                    data.dist[ta, tb] = data.dist[tb, ta] = block.min()
-        cpu["collision"] += time.process_time() - t0
+            if key in checked:
+                continue  # verified before: its cost (straight, detour or penalty) is exact
+            q_lo = problem.home if key[0] < 0 else problem.flat[key[0]]
+            q_hi = problem.flat[key[1]]
+            checked[key] = problem.checker.leg_in_collision(q_lo, q_hi, problem.clearance)
+            if not checked[key]:
+                continue
+            repair = True  # a cost of this tour was corrected: decode it again
+            cost = penalty
+            if problem.detours and planner["plans"] < detour_params.max_plans:
+                planner["plans"] += 1
+                t1 = time.process_time()
+                found = plan_detour(problem.checker, q_lo, q_hi, clearance=problem.clearance,
+                                    limits=problem.limits, jerk=problem.arm.limits.jerk,
+                                    seed=seed, params=detour_params, attempts=1)
+                spent += time.process_time() - t1
+                if found is not None:
+                    detours[key] = found
+                    cost = found.planned_time
+            if key[0] < 0:
+                data.home_out[key[1]] = cost
+                if not open_path:  # an open path's return to the home is free
+                    data.home_in[key[1]] = cost
+            else:
+                blocked.setdefault(key, float(data.legs[key]))
+                data.legs[a, b] = data.legs[b, a] = cost
+                ta, tb = owner[a], owner[b]
+                block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
+                data.dist[ta, tb] = data.dist[tb, ta] = block.min()
+        cpu["collision"] += time.process_time() - t0 - spent
+        cpu["planner"] += spent
         if not repair:
             if best is None or cost < best[0]:
                 best = (cost, genes.copy(), choice.copy())
@@ -684,6 +738,19 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     if broken:  # the operators keep every constraint: this is a bug, never an answer
         raise SubtaskOptError(f"internal error: the answer breaks its constraints: {broken}")
     chosen, path, planned, executed = _tour_legs(problem, order, index, open_path)
+    nodes = [-1] + [int(off[t] + index[t]) for t in order] + ([] if open_path else [-1])
+    t0 = time.process_time()
+    for a, b in zip(nodes[:-1], nodes[1:], strict=True):  # the answer's detours, refined
+        key = (min(a, b), max(a, b))
+        if key in detours and detour_params.attempts > 1 and problem.checker is not None:
+            better = plan_detour(problem.checker, detours[key].waypoints[0],
+                                 detours[key].waypoints[-1], clearance=problem.clearance,
+                                 limits=problem.limits, jerk=problem.arm.limits.jerk,
+                                 seed=seed, params=detour_params)
+            if better is not None and better.executed_time < detours[key].executed_time:
+                detours[key] = better
+    cpu["planner"] += time.process_time() - t0
+    waypoints = _detour_legs(nodes, detours, planned, executed)
     counts = {
         "targets": n,
         "configurations_per_target": [int(k) for k in problem.counts],
@@ -691,7 +758,11 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
         "dropped_in_collision": problem.dropped_in_collision,
         "legs_checked": len(checked),
         "legs_infeasible": int(sum(checked.values())),
-        "legs_detoured": 0,
+        "legs_planned": planner["plans"],
+        "legs_plan_found": len(detours),
+        "legs_detoured": len(waypoints),
+        "detours": problem.detours,
+        "plan_budget": detour_params.max_plans if problem.detours else 0,
         "search_rounds": rounds,
         "ga_rounds": ga_rounds,
     }
@@ -706,7 +777,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                           planned_leg_times=planned, total_time=float(executed.sum()),
                           collision_checked=problem.checker is not None, counts=counts,
                           cpu=cpu, generations=generations, restarts=restarts, seed=seed,
-                          open_path=open_path, problem=problem)
+                          open_path=open_path, problem=problem, detours=waypoints)
     return Result(order=order, total_time=float(executed.sum()), leg_times=executed,
                   matrix=np.zeros((0, 0)), generations=generations, restarts=restarts,
                   runtime_s=runtime, seed=seed, history=history, preset=params.preset,
@@ -784,6 +855,21 @@ def _near(problem: SerialProblem, k: int) -> np.ndarray:
     closeness[:n, :n] = problem.dist
     closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(problem.home_out, off[:-1])
     return neighbour_table(closeness, k)
+
+
+def _detour_legs(nodes: list[int], detours: dict[tuple[int, int], Detour],
+                 planned: np.ndarray, executed: np.ndarray) -> dict[int, np.ndarray]:
+    """The waypoints of every detoured leg of the tour through ``nodes`` (flat indices,
+    -1 the home), keyed by leg index; ``planned``/``executed`` take the detours' times."""
+    out = {}
+    for k, (a, b) in enumerate(zip(nodes[:-1], nodes[1:], strict=True)):
+        found = detours.get((min(a, b), max(a, b)))
+        if found is None:
+            continue
+        planned[k] = found.planned_time
+        executed[k] = found.executed_time
+        out[k] = found.waypoints if a == min(a, b) else found.waypoints[::-1].copy()
+    return out
 
 
 def _tour_legs(problem: SerialProblem, order: np.ndarray, choice: np.ndarray,

@@ -79,12 +79,16 @@ class Leg:
     Attributes:
         start: time the leg starts (s) within the tour.
         duration: its duration (s).
-        kind: ``"joint"`` (ruckig) or ``"line"`` (a planar straight line).
+        kind: ``"joint"`` (ruckig), ``"detour"`` (ruckig moves through waypoints) or
+            ``"line"`` (a planar straight line).
         from_stop, to_stop: target indices (:data:`HOME` for a home).
         from_config, to_config: the configurations at both ends (a planar arm's elbow
             branch, 0 down and 1 up; a serial arm's index among the target's IK
             solutions; 0 at a home).
         q_from, q_to: (n,) joint positions at both ends.
+        waypoints: (k, n) the joint-space corners the leg passes, ends included, or None
+            (a planar line); a ``"detour"`` leg (a serial arm's leg planned around an
+            obstacle) stops at each and moves straight between them.
     """
 
     start: float
@@ -97,6 +101,7 @@ class Leg:
     q_from: np.ndarray
     q_to: np.ndarray
     _eval: Callable[[np.ndarray], States] = field(repr=False)
+    waypoints: np.ndarray | None = field(default=None, repr=False)
 
     def states(self, t: np.ndarray) -> States:
         """(q, qd, qdd), each (T, n), at leg-local times t (clamped to [0, duration])."""
@@ -307,12 +312,41 @@ def from_serial_report(report: Any) -> Trajectory:
     index = [0 if s == HOME else int(report.configuration_index[s]) for s in stops]
     legs: list[Leg] = []
     start = 0.0
+    detours = getattr(report, "detours", {})
     for k in range(len(path) - 1):
-        move = joint_move(path[k], path[k + 1], lim.velocity, lim.acceleration, lim.jerk)
-        legs.append(Leg(start, move.duration, "joint", stops[k], stops[k + 1], index[k],
-                        index[k + 1], move.q0, move.q1, move.states))
-        start += move.duration
+        waypoints = detours.get(k)
+        if waypoints is None:
+            move = joint_move(path[k], path[k + 1], lim.velocity, lim.acceleration, lim.jerk)
+            legs.append(Leg(start, move.duration, "joint", stops[k], stops[k + 1], index[k],
+                            index[k + 1], move.q0, move.q1, move.states,
+                            np.array([move.q0, move.q1])))
+            start += move.duration
+            continue
+        duration, states = _chained_moves(np.asarray(waypoints), lim)
+        legs.append(Leg(start, duration, "detour", stops[k], stops[k + 1], index[k],
+                        index[k + 1], np.array(path[k]), np.array(path[k + 1]), states,
+                        np.array(waypoints)))
+        start += duration
     return Trajectory(problem.arm, legs, report.planned_time, "joint", problem)
+
+
+def _chained_moves(waypoints: np.ndarray, lim: Limits) -> tuple[float, Callable[..., States]]:
+    """Rest-to-rest phase-synchronised ruckig moves through ``waypoints`` (a detour, see
+    :mod:`subtask_opt.arm.detour`): the total duration and the states at leg times."""
+    moves = [joint_move(a, b, lim.velocity, lim.acceleration, lim.jerk)
+             for a, b in zip(waypoints[:-1], waypoints[1:], strict=True)]
+    starts = np.concatenate([[0.0], np.cumsum([m.duration for m in moves])])
+
+    def evaluate(t: np.ndarray) -> States:
+        t = np.atleast_1d(t)
+        n = waypoints.shape[1]
+        q, qd, qdd = (np.empty((len(t), n)) for _ in range(3))
+        which = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+        for k in np.unique(which):
+            sel = which == k
+            q[sel], qd[sel], qdd[sel] = moves[k].states(t[sel] - starts[k])
+        return q, qd, qdd
+    return float(starts[-1]), evaluate
 
 
 def _planar(result: Any, report: Any) -> Trajectory:
@@ -386,6 +420,9 @@ class ValidationReport:
             None for planar points (no axis).
         violations: one line per kind of violation.
         rtol, qtol, jtol: the tolerances used.
+        legs_in_collision: legs whose straight joint segments (a detour's between its
+            waypoints) the clearance-bounded sweep finds in collision; None without a
+            collision checker.
     """
 
     ok: bool
@@ -404,6 +441,7 @@ class ValidationReport:
     rtol: float
     qtol: float
     jtol: float
+    legs_in_collision: int | None = None
 
     @property
     def duration_error(self) -> float:
@@ -416,7 +454,8 @@ class ValidationReport:
         jerk = ("jerk not checked (no jerk limits)" if self.max_jerk_ratio is None
                 else f"max |dddq|/limit {max(self.max_jerk_ratio):.4f}")
         collisions = ("" if self.collisions is None
-                      else f", samples in collision {self.collisions}")
+                      else f", samples in collision {self.collisions}, legs in collision "
+                           f"{self.legs_in_collision}")
         axis = "" if self.max_axis_error is None else f" / {self.max_axis_error:.2e} rad"
         return (f"trajectory {head}: {self.n_samples} samples at dt={self.dt:g} s, duration "
                 f"{self.duration:.4f} s (planned {self.predicted_time:.4f} s), max |qd|/limit "
@@ -433,6 +472,7 @@ class ValidationReport:
                 "max_jerk_ratio": (None if self.max_jerk_ratio is None
                                    else max(self.max_jerk_ratio)),
                 "samples_in_collision": self.collisions,
+                "legs_in_collision": self.legs_in_collision,
                 "max_position_error": self.max_position_error,
                 "max_axis_error": self.max_axis_error,
                 "samples": self.n_samples, "dt": self.dt,
@@ -499,11 +539,24 @@ def validate(trajectory: Trajectory, *, dt: float | None = None, rtol: float = D
     rest = float(np.abs(qd[np.isin(t, trajectory.starts)]).max())
     if rest > 1e-6 * float(np.max(lim.velocity)):
         violations.append(f"arm not at rest at a stop (|qd| = {rest:.3g} rad/s)")
-    collisions = None
+    collisions = swept = None
     if checker is not None:
         collisions = int(sum(checker.in_collision(row) for row in q))
         if collisions:
             violations.append(f"{collisions} samples in collision")
+        # and every straight joint segment by the clearance-bounded sweep (the samples in
+        # time can be far apart in space on a fast leg)
+        swept = 0
+        for k, leg in enumerate(trajectory.legs):
+            corners = leg.waypoints
+            if corners is None:
+                continue
+            segments = [i for i in range(len(corners) - 1) if checker.leg_in_collision(
+                corners[i], corners[i + 1], problem.clearance)]
+            if segments:
+                swept += 1
+                violations.append(f"leg {k} ({leg.kind}) collides on segment {segments[0]} by "
+                                  f"the swept check at clearance {problem.clearance:g} m")
     position_error, axis_error = _fk_misses(trajectory)
     if position_error > FK_POSITION_TOL or (axis_error or 0.0) > FK_AXIS_TOL:
         violations.append(f"a configuration misses its target by {position_error:.3g} m"
@@ -520,7 +573,8 @@ def validate(trajectory: Trajectory, *, dt: float | None = None, rtol: float = D
         max_velocity_ratio=tuple(float(v) for v in vr.max(axis=0)),
         max_acceleration_ratio=tuple(float(v) for v in ar.max(axis=0)),
         max_jerk_ratio=jerk_ratio, position_margin=float(margin.min()),
-        collisions=collisions, max_position_error=position_error, max_axis_error=axis_error,
+        collisions=collisions, legs_in_collision=swept,
+        max_position_error=position_error, max_axis_error=axis_error,
         violations=tuple(violations), rtol=float(rtol), qtol=float(qtol), jtol=float(jtol))
 
 

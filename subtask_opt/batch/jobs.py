@@ -88,6 +88,9 @@ class Job:
         scene, standoff, axis_step, tool_frame: (serial arms) the cell's scene file, the
             tool standoff (m), the sampling step about a tool axis (degrees) and the tool
             frame (see ``subtask-opt solve``).
+        detours: (serial arms) plan legs whose straight joint motion collides around the
+            obstacles (:mod:`subtask_opt.arm.detour`); False forbids them (``solve
+            --no-detours``, ``batch --no-detours``).
 
     A serial arm's job (a robot that is not a planar 2R arm) takes a target file and the
     joint model; a planar option given to it, or a serial option to a planar arm, is
@@ -110,6 +113,7 @@ class Job:
     standoff: float = 0.0
     axis_step: float = 45.0
     tool_frame: str | None = None
+    detours: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or not self.id.strip():
@@ -156,11 +160,13 @@ class Job:
             value = getattr(self, name)
             if value is not None and (not isinstance(value, str) or not value.strip()):
                 raise ParameterError(f"Job.{name} must be a non-empty string, got {value!r}")
+        if not isinstance(self.detours, bool):
+            raise ParameterError(f"Job.detours must be true or false, got {self.detours!r}")
         defaults = {f.name: f.default for f in fields(self)}
         serial = self.serial
         wrong = (("time_model", "case_seed", "first", "k", "elbow", "configurations",
                   "line_fallback") if serial else ("scene", "standoff", "axis_step",
-                                                   "tool_frame"))
+                                                   "tool_frame", "detours"))
         for name in wrong:
             value = getattr(self, name)
             if value != defaults[name] and not (name == "time_model" and value == "joint"):
@@ -352,7 +358,7 @@ def _solve_serial_job(job: Job, targets: Any, seed: int, stop: Any,
 
     robot = load_robot(job.robot, tool_frame=job.tool_frame)
     home = None if job.home is None else np.radians(np.asarray(job.home, dtype=float))
-    problem = ArmProblem(targets, robot, home=home, scene=job.scene)
+    problem = ArmProblem(targets, robot, home=home, scene=job.scene, detours=job.detours)
     return solve_arm(problem, seed=seed, stop=stop, params=params)
 
 
@@ -636,7 +642,9 @@ def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
             jobs.append(_file_job(raw, file_options))
             continue
         if file_options:
-            raise ParameterError(f"--{next(iter(file_options)).replace('_', '-')} applies to "
+            name = next(iter(file_options))
+            flag = "--no-detours" if name == "detours" else f"--{name.replace('_', '-')}"
+            raise ParameterError(f"{flag} applies to "
                                  f"subtask and target files; the manifest {raw} gives each "
                                  "job its own")
         entries = data.get("jobs") if isinstance(data, dict) else data

@@ -26,7 +26,8 @@ from subtask_opt.cli._common import (
 
 MAX_JOB_TIME_S = 86_400.0
 """The longest ``--job-time-limit``."""
-FILE_OPTIONS = ("robot", "time_model", "home", "scene", "standoff", "axis_step", "tool_frame")
+FILE_OPTIONS = ("robot", "time_model", "home", "scene", "standoff", "axis_step", "tool_frame",
+                "detours")
 """The options that become :class:`~subtask_opt.batch.Job` fields of every file job."""
 
 # failed jobs printed one per line before "... and N more"
@@ -62,6 +63,9 @@ def register(root: argparse._SubParsersAction) -> None:
                        help="a planar arm's home point X,Y (m), or a serial arm's home "
                             "configuration in degrees (default: the robot file's)")
     add_cell_options(files)
+    files.add_argument("--no-detours", dest="detours", action="store_false", default=None,
+                       help="(serial arms) forbid legs whose straight joint motion collides "
+                            "instead of planning them around the obstacles")
     add_workers(p, what="the jobs")
     p.add_argument("--seed", type=seed, default=None, metavar="N",
                    help="solver seed of every job (default: each manifest job's own seed, "

@@ -143,7 +143,7 @@ ONLY: dict[str, str] = {
     "case_seed": PLANAR, "k": PLANAR, "elbow": PLANAR, "configurations": PLANAR,
     "line_fallback": PLANAR, "check_all_legs": PLANAR, "animate": PLANAR,
     "scene": SERIAL, "standoff": SERIAL, "axis_step": SERIAL, "tool_frame": SERIAL,
-    "limits": SERIAL, "view": SERIAL,
+    "limits": SERIAL, "view": SERIAL, "no_detours": SERIAL,
 }
 """The options that apply to one kind of robot only; any other option applies to every
 robot (``tests/cli/test_solve_options.py`` walks them all). Given for the other kind,
@@ -291,7 +291,7 @@ def _home(args: argparse.Namespace, robot: Any) -> Any:
 
 def _problem_options(args: argparse.Namespace, planar: bool) -> dict[str, Any]:
     if not planar:
-        return {"scene": args.scene}
+        return {"scene": args.scene, "detours": not args.no_detours}
     return {"time_model": args.time_model, "first": args.first,
             "k": 0.1 if args.k is None else args.k,
             "elbow": 0 if args.elbow is None else args.elbow,
@@ -358,6 +358,7 @@ def _plot(args: argparse.Namespace, problem: Any, result: Any, executed: Any) ->
         with output_file(args.plot) as tmp:
             save_solution_figure(result, problem.compiled, tmp)
     else:
+        from subtask_opt.plotting.cell_geometry import detour_legs
         from subtask_opt.plotting.serial import plot_serial_tour
 
         trajectory = executed[0]
@@ -367,7 +368,7 @@ def _plot(args: argparse.Namespace, problem: Any, result: Any, executed: Any) ->
             plot_serial_tour(serial.arm, serial.targets.points, trajectory.tool_positions(q),
                              result.leg_times, result.order, tmp,
                              title=_title(args, problem, result), q_home=serial.home,
-                             scene=serial.scene)
+                             scene=serial.scene, detours=detour_legs(trajectory))
     print(f"wrote {args.plot}")
 
 
@@ -392,6 +393,7 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
         print(f"wrote {args.animate}")
     if args.view:
         from subtask_opt.plotting.arm3d import write_tour_html
+        from subtask_opt.plotting.cell_geometry import detour_legs
 
         serial = problem.compiled
         times = trajectory.sample_times(0.01)
@@ -399,13 +401,15 @@ def _write_trajectory(args: argparse.Namespace, problem: Any, result: Any,
         with output_file(args.view) as tmp:
             write_tour_html(tmp, serial.arm, times, q, targets=serial.targets.points,
                             axes=serial.targets.axes, scene=serial.scene, order=result.order,
-                            title=_title(args, problem, result))
+                            title=_title(args, problem, result),
+                            detours=detour_legs(trajectory))
         print(f"wrote {args.view}")
 
 
 # ---------------------------------------------------------------- serial arms (6-/7-DOF)
 
-_SERIAL_FLAGS = ("view", "scene", "standoff", "axis_step", "tool_frame", "limits")
+_SERIAL_FLAGS = ("view", "scene", "standoff", "axis_step", "tool_frame", "limits",
+                 "no_detours")
 
 
 def _add_serial_options(p: argparse.ArgumentParser) -> None:
@@ -417,14 +421,18 @@ def _add_serial_options(p: argparse.ArgumentParser) -> None:
                    help="a named limit set of the robot or a JSON file of per-joint limits")
     g.add_argument("--view", metavar="OUT.html", type=html_output,
                    help="write the executed tour as an offline 3-D HTML animation")
+    g.add_argument("--no-detours", action="store_true",
+                   help="forbid legs whose straight joint motion collides instead of "
+                        "planning them around the obstacles (OMPL RRTConnect)")
 
 
 def add_cell_options(g: Any) -> None:
     """A serial arm's cell: ``--scene``, ``--standoff``, ``--axis-step``, ``--tool-frame``
     (``solve`` and ``batch``)."""
-    g.add_argument("--scene", metavar="SCENE.json", default=None,
-                   help='boxes to avoid: {"boxes": [{"name", "center", "half_extents", '
-                        '"rotation"}]}')
+    g.add_argument("--scene", metavar="SCENE.json|MESH.stl", default=None,
+                   help='the cell: {"boxes": [...], "meshes": [{"name", "file", "scale", '
+                        '"position", "rotation"}], "tool": {"frame", "tcp", "boxes", '
+                        '"meshes"}} (subtask_opt.arm.scene), or one mesh file at the origin')
     g.add_argument("--standoff", type=float_in(-1.0, 1.0), default=None, metavar="M",
                    help="tool standoff along its axis in metres (default 0)")
     g.add_argument("--axis-step", type=float_in(5.0, 360.0), default=None,

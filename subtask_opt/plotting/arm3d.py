@@ -13,24 +13,31 @@ library, no CDN, no server). The page shows:
   from the side), joints as dots;
 * the targets (numbered by their index) and a short line along each tool axis;
 * the whole tool path (grey) and the part already executed (blue);
-* the boxes, shaded faces with their edges;
+* the boxes, shaded faces with their edges; the scene's meshes, flat-shaded triangles
+  (simplified above ``max_triangles``, :mod:`subtask_opt.plotting.cell_geometry`);
+* the scene's tool (its boxes and meshes, orange) on the frame it is mounted on, moving
+  with the arm;
+* detoured legs (planned around an obstacle, :mod:`subtask_opt.arm.detour`): their part
+  of the tool path in purple, the TCP at each waypoint a purple square;
 * a ground grid (0.1 m) at z = 0 and the base frame's x/y/z axes.
 
 Controls: play/pause, a time slider, a speed menu, mouse drag to rotate, wheel
 to zoom, double click to reset the view; ``page.html#t=2.5`` opens at t = 2.5 s.
-The element ``#status`` reads ``rendered frame 0 of F frames`` (attribute
-``data-ok="1"``) once the first frame is drawn, or ``error: ...``
-(``data-ok="0"``) when the script fails: the tests load the page in a headless
-Chromium and read it.
+The element ``#status`` reads ``rendered frame k of F frames`` (attribute
+``data-ok="1"``) once the first frame is drawn, k following the animation (the slider,
+play, ``#t=``), or ``error: ...`` (``data-ok="0"``) when the script fails: the tests load
+the page in a headless Chromium and read it.
 
-Text from the inputs (the title, the robot's name, box names, file names) reaches the page
-only as HTML-escaped text (the title and heading) or inside the JSON document, where ``<``,
+Text from the inputs (the title, the robot's name, box, mesh and frame names, file names)
+reaches the page only as HTML-escaped text (the title and heading) or inside the JSON
+document, where ``<``,
 ``>``, ``&`` and U+2028/2029 are ``\\u`` escapes (:func:`script_json`), so it cannot end the
 ``<script>`` element or become markup; the script shows strings with ``textContent`` only.
 
 The page's size is bounded: at most ``max_frames`` frames (default 2000,
 evenly spaced in the index, first and last kept) with coordinates rounded to
-0.1 mm, so about 50 bytes per joint per frame.
+0.1 mm, so about 50 bytes per joint per frame (and 12 numbers per frame for a tool), plus
+at most ``max_triangles`` mesh triangles.
 """
 
 from __future__ import annotations
@@ -44,6 +51,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from subtask_opt.base.errors import ParameterError, require_int
+from subtask_opt.plotting.cell_geometry import (
+    VIEW_TRIANGLES,
+    Surface,
+    checked_detours,
+    frame_poses,
+    scene_surfaces,
+    tool_surfaces,
+)
 
 if TYPE_CHECKING:
     from subtask_opt.arm.scene import Scene
@@ -117,9 +132,15 @@ def _rounded(arr: np.ndarray) -> Any:
     return np.round(arr, _DECIMALS).tolist()
 
 
+def _surface_json(surface: Surface) -> dict[str, Any]:
+    return {"name": surface.name, "vertices": _rounded(surface.vertices.reshape(-1)),
+            "triangles": surface.triangles.reshape(-1).astype(int).tolist()}
+
+
 def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, axes: Any = None,
                    scene: Scene | None = None, title: str = "", order: Any = None,
-                   max_frames: int = MAX_FRAMES) -> dict[str, Any]:
+                   max_frames: int = MAX_FRAMES, detours: Any = None,
+                   max_triangles: int = VIEW_TRIANGLES) -> dict[str, Any]:
     """The JSON document :func:`write_tour_html` embeds (validated; see its arguments)."""
     from subtask_opt.arm.scene import Scene
     from subtask_opt.arm.serial import SerialArm
@@ -163,10 +184,24 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
                                  f"{n} target indices, got {order!r}")
         for visit, i in enumerate(o):
             labels[int(i)] = str(visit + 1)
+    require_int("write_tour_html", "max_triangles", max_triangles, 12)
+    legs = checked_detours("write_tour_html", detours, arm.nq)
     idx = frame_indices(t.size, max_frames)
     skel = skeleton_points(arm, qa[idx])
     boxes = [] if scene is None else [{"name": b.name, "corners": _box_corners(b)}
                                       for b in scene.boxes]
+    meshes = [_surface_json(s) for s in scene_surfaces(scene, max_triangles)]
+    tool: dict[str, Any] | None = None
+    if scene is not None and scene.tool is not None and scene.tool.has_geometry:
+        poses = frame_poses(arm, qa[idx], scene.tool.frame)
+        tool = {"frame": scene.tool.frame,
+                "parts": [_surface_json(s) for s in tool_surfaces(scene, max_triangles)],
+                # per frame: the mounting frame's rotation (row-major) and origin
+                "poses": np.round(np.concatenate([poses[:, :3, :3].reshape(-1, 9),
+                                                  poses[:, :3, 3]], axis=1), 5).tolist()}
+    detoured = [{"t": [round(leg.start, 6), round(leg.end, 6)],
+                 "corners": _rounded(np.array([arm.fk(w)[:3, 3] for w in leg.waypoints]))}
+                for leg in legs]
     return {
         "title": title or f"{arm.name}: tour of {pts.shape[0]} targets",
         "robot": arm.name,
@@ -178,13 +213,17 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
         "label_kind": "index" if order is None else "visit number",
         "axes": _rounded(ax),
         "boxes": boxes,
+        "meshes": meshes,
+        "tool": tool,
+        "detours": detoured,
         "source_frames": int(t.size),
     }
 
 
 def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
                     targets: Any = None, axes: Any = None, scene: Scene | None = None,
-                    title: str = "", order: Any = None, max_frames: int = MAX_FRAMES) -> Path:
+                    title: str = "", order: Any = None, max_frames: int = MAX_FRAMES,
+                    detours: Any = None, max_triangles: int = VIEW_TRIANGLES) -> Path:
     """Write an offline HTML animation of ``arm`` moving through ``q`` at ``times``.
 
     Args:
@@ -195,10 +234,17 @@ def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
         targets: optional (N, 3) target positions (m, base frame), drawn numbered:
             by index, or by visit (1 = first) when ``order`` is given.
         axes: optional (N, 3) tool axes at the targets (drawn as short lines).
-        scene: optional :class:`~subtask_opt.arm.scene.Scene` whose boxes are drawn.
+        scene: optional :class:`~subtask_opt.arm.scene.Scene`: its boxes and meshes are
+            drawn, and its tool's parts on the frame they are mounted on, moving with the arm.
         title: the page's heading (default: robot and target count).
         order: optional (N,) target indices in visiting order (labels the targets).
         max_frames: most frames embedded (sub-sampled evenly, first and last kept).
+        detours: optional detoured legs
+            (:func:`~subtask_opt.plotting.cell_geometry.detour_legs` of the trajectory):
+            their part of the tool path is drawn in purple, the TCP at their waypoints
+            as purple squares.
+        max_triangles: most mesh triangles drawn, all meshes together (a larger mesh is
+            simplified for the picture, :mod:`subtask_opt.plotting.cell_geometry`).
 
     Returns:
         The path written.
@@ -207,7 +253,8 @@ def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
         ParameterError: a shape, a non-finite value, decreasing times, zero axes.
     """
     data = tour_view_data(arm, times, q, targets=targets, axes=axes, scene=scene, title=title,
-                          order=order, max_frames=max_frames)
+                          order=order, max_frames=max_frames, detours=detours,
+                          max_triangles=max_triangles)
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(render_page(data), encoding="utf-8")
@@ -288,8 +335,16 @@ _PAGE = r"""<!DOCTYPE html>
       <div><span class="sw" style="background:#adb5bd"></span>tool path, to come</div>
       <div><span class="sw dot"></span>targets (<span id="label-kind">index</span>) and
         tool axes</div>
-      <div><span class="sw" style="background:rgba(120,120,160,0.5);height:10px"></span>
+      <div id="legend-boxes"><span class="sw"
+        style="background:rgba(120,120,160,0.5);height:10px"></span>
         scene boxes</div>
+      <div id="legend-meshes"><span class="sw"
+        style="background:rgba(150,160,120,0.6);height:10px"></span>
+        scene meshes</div>
+      <div id="legend-tool"><span class="sw" style="background:#f59f00;height:10px"></span>
+        tool (on <span id="tool-frame"></span>)</div>
+      <div id="legend-detours"><span class="sw" style="background:#9c36b5"></span>
+        detoured legs (squares: waypoints)</div>
       <div id="scale"></div>
     </div>
     <div id="help">drag: rotate &middot; wheel: zoom &middot; double click: reset view</div>
@@ -331,6 +386,20 @@ _PAGE = r"""<!DOCTYPE html>
     var playBtn = document.getElementById("play");
     var speedSel = document.getElementById("speed");
     slider.max = String(T - 1);
+    var MESHES = D.meshes || [], TOOL = D.tool || null, DETOURS = D.detours || [];
+    if (TOOL && TOOL.poses.length !== T) throw new Error("malformed tour data");
+    if (!D.boxes.length) document.getElementById("legend-boxes").style.display = "none";
+    if (!MESHES.length) document.getElementById("legend-meshes").style.display = "none";
+    if (TOOL) document.getElementById("tool-frame").textContent = TOOL.frame;
+    else document.getElementById("legend-tool").style.display = "none";
+    if (!DETOURS.length) document.getElementById("legend-detours").style.display = "none";
+    // frame k's path segment (k - 1 -> k) belongs to a detoured leg
+    var inDetour = [];
+    for (var k0 = 0; k0 < T; k0++) {
+      inDetour.push(k0 > 0 && DETOURS.some(function (dl) {
+        return D.t[k0 - 1] >= dl.t[0] - 1e-9 && D.t[k0] <= dl.t[1] + 1e-9;
+      }));
+    }
 
     function pt(frame, j) {
       var f = D.frames[frame];
@@ -344,6 +413,24 @@ _PAGE = r"""<!DOCTYPE html>
     for (var k = 0; k < T; k++) for (var j = 0; j < P; j++) grow(pt(k, j));
     D.targets.forEach(grow);
     D.boxes.forEach(function (b) { b.corners.forEach(grow); });
+    function vertex(m, i) {
+      return [m.vertices[3 * i], m.vertices[3 * i + 1], m.vertices[3 * i + 2]];
+    }
+    MESHES.forEach(function (m) {
+      for (var i = 0; 3 * i < m.vertices.length; i++) grow(vertex(m, i));
+    });
+    var toolReach = 0;  // the tool lies within this distance of its frame's origin
+    if (TOOL) {
+      TOOL.parts.forEach(function (m) {
+        for (var i = 0; 3 * i < m.vertices.length; i++) {
+          toolReach = Math.max(toolReach, Math.hypot.apply(null, vertex(m, i)));
+        }
+      });
+      TOOL.poses.forEach(function (ps) {
+        grow([ps[9] - toolReach, ps[10] - toolReach, ps[11] - toolReach]);
+        grow([ps[9] + toolReach, ps[10] + toolReach, ps[11] + toolReach]);
+      });
+    }
     var center = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2];
     var radius = Math.max(0.05, 0.5 * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]));
     var extent = Math.max(hi[0] - lo[0], hi[1] - lo[1], 0.2);
@@ -399,6 +486,35 @@ _PAGE = r"""<!DOCTYPE html>
                  [1, 3, 7, 5]];
     var LIGHT = norm([0.4, -0.5, 1.0]);
     var frame = 0, playing = false, tNow = D.t[0], last = null;
+    // one triangle of a surface, flat-shaded, painted at its farthest corner's depth (as
+    // the box faces: targets drawn on a part stay visible)
+    function triangle(items, w, s, rgb, alpha) {
+      if (!s[0] || !s[1] || !s[2]) return;
+      var n = norm(cross(sub(w[1], w[0]), sub(w[2], w[0])));
+      var shade = 0.55 + 0.45 * Math.abs(dot(n, LIGHT));
+      var fill = "rgba(" + Math.round(rgb[0] * shade) + "," + Math.round(rgb[1] * shade) + "," +
+                 Math.round(rgb[2] * shade) + "," + alpha + ")";
+      items.push({ d: Math.max(s[0][2], s[1][2], s[2][2]), f: function () {
+        ctx.fillStyle = fill; ctx.strokeStyle = fill; ctx.lineWidth = 0.5;
+        ctx.beginPath(); ctx.moveTo(s[0][0], s[0][1]); ctx.lineTo(s[1][0], s[1][1]);
+        ctx.lineTo(s[2][0], s[2][1]); ctx.closePath(); ctx.fill(); ctx.stroke();
+      } });
+    }
+    function surface(items, m, place, rgb, alpha) {
+      var w = [], s = [];
+      for (var i = 0; 3 * i < m.vertices.length; i++) {
+        var p = place(vertex(m, i));
+        w.push(p); s.push(proj(p));
+      }
+      for (var k = 0; k < m.triangles.length; k += 3) {
+        var a = m.triangles[k], b = m.triangles[k + 1], c = m.triangles[k + 2];
+        triangle(items, [w[a], w[b], w[c]], [s[a], s[b], s[c]], rgb, alpha);
+      }
+    }
+    function same(p) { return p; }
+    function square(a, r, colour) {
+      ctx.fillStyle = colour; ctx.fillRect(a[0] - r, a[1] - r, 2 * r, 2 * r);
+    }
 
     function draw() {
       setCamera();
@@ -447,16 +563,33 @@ _PAGE = r"""<!DOCTYPE html>
           } });
         });
       });
-      // tool path: executed (blue) and to come (grey)
+      MESHES.forEach(function (m) { surface(items, m, same, [170, 180, 135], 0.5); });
+      if (TOOL) {
+        var ps = TOOL.poses[frame];
+        var mount = function (v) {
+          return [ps[0] * v[0] + ps[1] * v[1] + ps[2] * v[2] + ps[9],
+                  ps[3] * v[0] + ps[4] * v[1] + ps[5] * v[2] + ps[10],
+                  ps[6] * v[0] + ps[7] * v[1] + ps[8] * v[2] + ps[11]];
+        };
+        TOOL.parts.forEach(function (m) { surface(items, m, mount, [245, 159, 0], 0.9); });
+      }
+      // tool path: executed (blue) and to come (grey); detoured legs purple
       for (var k = 1; k < T; k++) {
         var p0 = proj(pt(k - 1, P - 1)), p1 = proj(pt(k, P - 1));
         if (!p0 || !p1) continue;
-        (function (p0, p1, done) {
+        (function (p0, p1, done, det) {
+          var colour = det ? (done ? "#9c36b5" : "#d0a3e0") : (done ? "#1c7ed6" : "#adb5bd");
           items.push({ d: (p0[2] + p1[2]) / 2, f: function () {
-            line(p0, p1, done ? "#1c7ed6" : "#adb5bd", done ? 2.5 : 1.5);
+            line(p0, p1, colour, done ? 2.5 : (det ? 2 : 1.5));
           } });
-        })(p0, p1, k <= frame);
+        })(p0, p1, k <= frame, inDetour[k]);
       }
+      DETOURS.forEach(function (dl) {
+        dl.corners.slice(1, -1).forEach(function (c) {
+          var a = proj(c);
+          if (a) items.push({ d: a[2], f: function () { square(a, 3.5, "#9c36b5"); } });
+        });
+      });
       D.targets.forEach(function (tp, i) {
         var a = proj(tp);
         if (!a) return;
@@ -494,6 +627,10 @@ _PAGE = r"""<!DOCTYPE html>
       items.forEach(function (it) { it.f(); });
       clock.textContent = "t = " + D.t[frame].toFixed(3) + " s / " + D.t[T - 1].toFixed(3) + " s";
       slider.value = String(frame);
+      // the status line follows the animation (an error, once shown, stays)
+      if (statusEl.getAttribute("data-ok") !== "0") {
+        statusEl.textContent = "rendered frame " + frame + " of " + T + " frames";
+      }
     }
     function frameAt(t) {  // last frame whose time <= t
       var a = 0, b = T - 1;
@@ -543,7 +680,6 @@ _PAGE = r"""<!DOCTYPE html>
     window.addEventListener("resize", function () { resize(); draw(); });
     resize();
     draw();
-    statusEl.textContent = "rendered frame 0 of " + T + " frames";
     var m = /^#t=([0-9.]+)$/.exec(window.location.hash);  // open at a time: page.html#t=2.5
     if (m) { tNow = parseFloat(m[1]); frame = frameAt(tNow); draw(); }
     statusEl.setAttribute("data-ok", "1");

@@ -10,6 +10,12 @@ import numpy as np
 
 from subtask_opt.base.errors import ParameterError
 from subtask_opt.plotting.arm3d import checked_array
+from subtask_opt.plotting.cell_geometry import (
+    checked_detours,
+    frame_poses,
+    scene_surfaces,
+    tool_surfaces,
+)
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -22,6 +28,11 @@ MAX_NUMBERED = 60
 
 MAX_NUMBERED_3D = 20
 """Above this many targets the 3-D view carries no numbers (the plane view does)."""
+
+FIGURE_TRIANGLES = 6000
+"""Most mesh triangles the figure draws (matplotlib sorts and draws every one)."""
+
+DETOUR_COLOUR = "#9c36b5"
 
 _BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
               (0, 4), (1, 5), (2, 6), (3, 7)]
@@ -57,7 +68,7 @@ def target_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: Any,
                        order: Any, *, title: str = "", q_home: Any = None,
-                       scene: Scene | None = None) -> Figure:
+                       scene: Scene | None = None, detours: Any = None) -> Figure:
     """The figure of :func:`plot_serial_tour`, not saved (arguments as there)."""
     import matplotlib.pyplot as plt
 
@@ -84,6 +95,11 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
                              f"got {order!r}")
     if not isinstance(title, str):
         raise ParameterError(f"plot_serial_tour: title must be a string, got {title!r}")
+    detoured = checked_detours("plot_serial_tour", detours, arm.nq)
+    for k, leg in enumerate(detoured):
+        if not 0 <= leg.index < legs.shape[0]:
+            raise ParameterError(f"plot_serial_tour: detours[{k}].index must be a leg "
+                                 f"number in [0, {legs.shape[0] - 1}], got {leg.index}")
 
     fig = plt.figure(figsize=(13, 11))
     grid = fig.add_gridspec(2, 2, width_ratios=[1.15, 1.0], height_ratios=[1.2, 1.0],
@@ -93,6 +109,14 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
     bar = fig.add_subplot(grid[1, :])
 
     # 3-D: scene, tool path, targets numbered by visit, the arm at home
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    drawn = [np.zeros((0, 3))]  # every point drawn: the axes contain them all
+    for k, surf in enumerate(scene_surfaces(scene, FIGURE_TRIANGLES)):
+        ax.add_collection3d(Poly3DCollection(
+            surf.vertices[surf.triangles], facecolor="#a9b388", edgecolor="none", alpha=0.45,
+            label="scene meshes" if k == 0 else None))
+        drawn.append(surf.vertices)
     if scene is not None:
         for k, box in enumerate(scene.boxes):
             corners = np.array([box.center + box.rotation @ (np.array(
@@ -101,7 +125,16 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
             for a, b in _BOX_EDGES:
                 ax.plot(*corners[[a, b]].T, color="#868e96", lw=0.8,
                         label="scene boxes" if k == 0 and (a, b) == (0, 1) else None)
+            drawn.append(corners)
     ax.plot(*path.T, color="#1c7ed6", lw=1.0, label="tool path")
+    for k, leg in enumerate(detoured):  # the TCP along the straight joint segments
+        tcp = np.array([arm.fk(row)[:3, 3] for row in leg.joint_path()])
+        corners = np.array([arm.fk(row)[:3, 3] for row in leg.waypoints[1:-1]])
+        ax.plot(*tcp.T, color=DETOUR_COLOUR, lw=1.8,
+                label=f"detoured legs ({len(detoured)}; squares: waypoints)" if k == 0
+                else None)
+        ax.scatter(*corners.T, marker="s", s=16, color=DETOUR_COLOUR, depthshade=False)
+        drawn.append(tcp)
     ax.scatter(*pts.T, color="#2b8a3e", s=18, depthshade=False, label=f"targets ({n})")
     step = max(1, int(np.ceil(n / MAX_NUMBERED)))
     if n <= MAX_NUMBERED_3D:
@@ -115,10 +148,19 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
         q = checked_array("plot_serial_tour", "q_home", q_home, (arm.nq,))
         skel = skeleton_points(arm, q[None])[0]
         ax.plot(*skel.T, color="#e8590c", lw=4, solid_capstyle="round", label="arm at home")
-    every = np.vstack([pts, path])
+        drawn.append(skel)
+        if scene is not None and scene.tool is not None:
+            mount = frame_poses(arm, q[None], scene.tool.frame)[0]
+            for k, surf in enumerate(tool_surfaces(scene, FIGURE_TRIANGLES)):
+                placed = surf.vertices @ mount[:3, :3].T + mount[:3, 3]
+                ax.add_collection3d(Poly3DCollection(
+                    placed[surf.triangles], facecolor="#f59f00", edgecolor="#a35f00",
+                    linewidths=0.3, alpha=0.9,
+                    label=f"tool on {scene.tool.frame}" if k == 0 else None))
+                drawn.append(placed)
+    every = np.vstack([pts, path, *drawn])
     lo, hi = every.min(axis=0), every.max(axis=0)
-    if q_home is not None:
-        lo, hi = np.minimum(lo, skel.min(axis=0)), np.maximum(hi, skel.max(axis=0))
+    # equal axes (a cube) that contain the scene, the arm and the path
     mid, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 0.05)
     ax.set_xlim(mid[0] - half, mid[0] + half)
     ax.set_ylim(mid[1] - half, mid[1] + half)
@@ -154,7 +196,10 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
 
     # per-leg times
     x = np.arange(legs.shape[0])
-    bar.bar(x, legs, color="#1c7ed6", width=0.8 if n < 100 else 1.0, label="leg time")
+    colours = np.full(legs.shape[0], "#1c7ed6", dtype=object)
+    colours[[leg.index for leg in detoured]] = DETOUR_COLOUR
+    bars = bar.bar(x, legs, color=list(colours), width=0.8 if n < 100 else 1.0)
+    bars.set_label("leg time" + (", detoured legs purple" if detoured else ""))
     bar.axhline(legs.mean(), color="#c92a2a", lw=1, ls="--",
                 label=f"mean {legs.mean():.3f} s")
     if n <= 20:
@@ -175,7 +220,7 @@ def serial_tour_figure(arm: SerialArm, targets: Any, tool_path: Any, leg_times: 
 
 def plot_serial_tour(arm: SerialArm, targets: Any, tool_path: Any, leg_times: Any, order: Any,
                      path: str | Path, *, title: str = "", q_home: Any = None,
-                     scene: Scene | None = None) -> Path:
+                     scene: Scene | None = None, detours: Any = None) -> Path:
     """Write a figure of a serial-arm tour: a 3-D view and a bar chart of the leg times.
 
     Args:
@@ -189,7 +234,12 @@ def plot_serial_tour(arm: SerialArm, targets: Any, tool_path: Any, leg_times: An
         path: the image file (PNG, PDF, SVG by extension); folders are created.
         title: the figure's title, saying what was run.
         q_home: optional (n,) home configuration: the arm's links are drawn there.
-        scene: optional :class:`~subtask_opt.arm.scene.Scene` whose box edges are drawn.
+        scene: optional :class:`~subtask_opt.arm.scene.Scene`: its box edges and meshes
+            are drawn (meshes simplified above :data:`FIGURE_TRIANGLES`), and its tool on
+            the arm at home.
+        detours: optional detoured legs
+            (:func:`~subtask_opt.plotting.cell_geometry.detour_legs` of the trajectory):
+            the TCP along them in purple with their waypoints as squares, their bars purple.
 
     Returns:
         The path written.
@@ -201,7 +251,7 @@ def plot_serial_tour(arm: SerialArm, targets: Any, tool_path: Any, leg_times: An
     import matplotlib.pyplot as plt
 
     fig = serial_tour_figure(arm, targets, tool_path, leg_times, order, title=title,
-                             q_home=q_home, scene=scene)
+                             q_home=q_home, scene=scene, detours=detours)
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=110, bbox_inches="tight")

@@ -89,7 +89,7 @@ def test_scene_with_rotation_and_bom(tmp_path):
 
 
 @pytest.mark.parametrize(("doc", "match"), [
-    ([], "'boxes' list"),
+    ([], "'boxes', 'meshes' and/or 'tool'"),
     ({"boxes": {}}, "'boxes' must be a list"),
     ({"boxes": [{"name": "a", "center": [0, 0, 0]}]}, r"boxes\[0\] lacks the field "
                                                          "'half_extents'"),

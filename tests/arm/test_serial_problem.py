@@ -159,6 +159,7 @@ def test_blocked_legs_are_avoided_and_the_answer_is_optimal_without_them(arm) ->
     blocked = list(zip(path[:-1], path[1:], strict=True))
     checker = _BlockingChecker(blocked)
     object.__setattr__(problem, "checker", checker)
+    object.__setattr__(problem, "detours", False)  # forbidding, as --no-detours
     result = solve_serial_problem(problem, seed=0).report
     chosen = result.tour_configurations()[1:-1]
     assert not any(checker.leg_in_collision(a, b, 0.01)
@@ -188,6 +189,7 @@ def test_no_collision_free_tour_raises_and_restores_the_legs(arm) -> None:
     a, b = problem.configurations
     object.__setattr__(problem, "checker", _BlockingChecker(
         [(qa, qb) for qa in a for qb in b]))
+    object.__setattr__(problem, "detours", False)  # forbidding, as --no-detours
     with pytest.raises(NoPathError, match="no tour avoids the legs in collision"):
         solve_serial_problem(problem, seed=0)
     np.testing.assert_array_equal(problem.legs, legs_before)
@@ -217,6 +219,7 @@ def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> N
     path = solve_serial_problem(problem, seed=0).report.tour_configurations()[1:-1]
     checker = _BlockingChecker(list(zip(path[:-1], path[1:], strict=True)))
     object.__setattr__(problem, "checker", checker)
+    object.__setattr__(problem, "detours", False)
     result = solve_serial_problem(problem, seed=0).report
     assert result.counts["ga_rounds"] == 1
     assert result.counts["search_rounds"] >= 2
@@ -229,6 +232,7 @@ def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> N
     a, b = blocked.configurations
     object.__setattr__(blocked, "checker", _BlockingChecker(
         [(qa, qb) for qa in a for qb in b]))
+    object.__setattr__(blocked, "detours", False)
     with pytest.raises(NoPathError, match="still in the best tour after 1 searches"):
         solve_serial_problem(blocked, seed=0)
 
@@ -236,7 +240,7 @@ def test_search_limit_keeps_the_repaired_answer_or_raises(arm, monkeypatch) -> N
 def test_cpu_split_reports_compilation_apart(solved) -> None:
     # every phase is timed; numba's compile (or cache load) is its own entry, not search
     _, result = solved
-    assert set(result.cpu) == {"ik", "collision", "matrix", "search", "compile"}
+    assert set(result.cpu) == {"ik", "collision", "matrix", "search", "compile", "planner"}
     assert all(v >= 0.0 for v in result.cpu.values())
 
 

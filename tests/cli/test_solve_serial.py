@@ -46,7 +46,8 @@ def test_documented_command_writes_json_and_trajectory(files, capsys) -> None:
     assert doc["total_time"] == pytest.approx(sum(doc["leg_times"]))
     assert doc["trajectory"]["valid"] is True
     assert doc["report"]["collision_checked"] is True
-    assert set(doc["report"]["cpu_s"]) == {"ik", "collision", "matrix", "search", "compile"}
+    assert set(doc["report"]["cpu_s"]) == {"ik", "collision", "matrix", "search", "compile",
+                                              "planner"}
     assert doc["robot"] == "ur5" and doc["time_model"] == "joint"
     header = out_csv.read_text().splitlines()[0]
     assert header == "t,q1,q2,q3,q4,q5,q6,dq1,dq2,dq3,dq4,dq5,dq6,x,y,z"

@@ -30,6 +30,13 @@ def test_robotsp_25_holes_valid_and_beats_the_stand_in() -> None:
     assert methods["ours"]["valid"], methods["ours"]["violations"]
     assert methods["ours"]["legs_in_collision"] == 0
     assert methods["ours"]["executed_time_s"] < methods["robotsp"]["executed_time_s"]
+    # RoboTSP's plan-after pipeline: its colliding legs planned, the trajectory clear
+    planned = methods["robotsp_planned"]
+    assert planned["valid"], planned["violations"]
+    assert planned["trajectory_legs_in_collision"] == 0
+    assert planned["legs_detoured"] == methods["robotsp"]["legs_in_collision"]
+    assert methods["ours"]["trajectory_legs_in_collision"] == 0
+    assert methods["ours"]["executed_time_s"] < planned["executed_time_s"]
 
 
 @pytest.mark.parametrize(("option", "value"), [("runs", 0), ("runs", 1001), ("kicks", -1)])

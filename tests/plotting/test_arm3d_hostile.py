@@ -3,11 +3,11 @@
 Many generated hostile strings (script tags, event-handler attributes, comment and CDATA
 openers, quotes, entities, the page's own placeholders, U+2028/2029, lone surrogates) go into
 every string field that reaches the page: the title, the robot name (the URDF's stem), the
-scene's box names and, through the CLI, the case file's name. The oracles are independent of
-the writer: Python's HTML parser must see exactly the elements and attributes of a page written
-with plain names, and the strings must come back unchanged from the text and the JSON; then
-headless Chromium opens such pages and none of the payloads runs (a naive page built from the
-same strings shows that they would).
+scene's box and mesh names and, through the CLI, the case file's name. The oracles are
+independent of the writer: Python's HTML parser must see exactly the elements and attributes
+of a page written with plain names, and the strings must come back unchanged from the text
+and the JSON; then headless Chromium opens such pages and none of the payloads runs (a naive
+page built from the same strings shows that they would).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from subtask_opt.arm.meshes import Mesh, box_triangles, write_stl
 from subtask_opt.arm.scene import Box, Scene
 from subtask_opt.arm.serial import example_robot_data_share, load_serial_arm
 from subtask_opt.plotting import arm3d
@@ -110,11 +111,19 @@ def ur5():
     return load_serial_arm("ur5")
 
 
-def _scene(names: list[str]) -> Scene:
+def _scene(names: list[str], folder: Path | None = None) -> Scene:
+    """Boxes named ``names``; with a folder, meshes of the same names too."""
+    meshes: tuple[Mesh, ...] = ()
+    if folder is not None:
+        stl = folder / "cube.stl"
+        if not stl.exists():
+            write_stl(stl, *box_triangles([0.03, 0.03, 0.03]))
+        meshes = tuple(Mesh(name=n, file=stl, position=[-0.5, 0.3 - 0.2 * k, 0.1])
+                       for k, n in enumerate(names))
     return Scene(boxes=tuple(
         Box(name=n, center=np.array([0.5, 0.3 - 0.2 * k, 0.2]),
             half_extents=np.array([0.05, 0.05, 0.05]), rotation=np.eye(3))
-        for k, n in enumerate(names)))
+        for k, n in enumerate(names)), meshes=meshes)
 
 
 def _page(arm, folder: Path, tag: str, *, robot: str, title: str, boxes: list[str]) -> Path:
@@ -123,7 +132,7 @@ def _page(arm, folder: Path, tag: str, *, robot: str, title: str, boxes: list[st
     t = np.linspace(0.0, 1.0, 3)
     q = np.zeros((3, arm.nq))
     return write_tour_html(folder / f"{tag}.html", named, t, q, targets=[[0.5, 0.3, 0.2]],
-                           scene=_scene(boxes), title=title)
+                           scene=_scene(boxes, folder), title=title)
 
 
 PAGES = 40
@@ -153,6 +162,7 @@ def test_generated_hostile_strings_stay_text_and_data(ur5, tmp_path) -> None:
         doc = json.loads(blob)
         assert doc["title"] == want_title and doc["robot"] == robot
         assert [b["name"] for b in doc["boxes"]] == boxes
+        assert [m["name"] for m in doc["meshes"]] == boxes
         # outside the JSON data no string with a special character appears as written
         # (unless the plain page has it too, as "<" or "'")
         outside = raw.replace(blob, "")
