@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import pickle
 import socket
+import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable, Sequence
@@ -629,8 +630,11 @@ def load_jobs(paths: Sequence[str | Path], **file_options: Any) -> list[Job]:
     jobs: list[Job] = []
     for raw in paths:
         path = Path(raw)
-        check_input_file(path, "job file")  # a regular file: never a FIFO or a device
         suffix = path.suffix.lower()
+        # a regular file, never a FIFO or a device; a subtask file's size is its job's to
+        # refuse (that job fails, the others run), a manifest's is the batch's
+        check_input_file(path, "job file",
+                         **({"max_bytes": sys.maxsize} if suffix == ".csv" else {}))
         if suffix == ".csv":
             jobs.append(_file_job(raw, file_options))
             continue

@@ -63,7 +63,7 @@ def register(root: argparse._SubParsersAction) -> None:
                         "arm cannot drive)")
     p.add_argument("--k", type=float_in(0.0, 0.5), default=None,
                    help="via-point fraction of the paper time model, in [0, 0.5] (default 0.1)")
-    p.add_argument("--elbow", type=int, default=None, choices=(0, 1),
+    p.add_argument("--elbow", type=int_in(0, 1), default=None, choices=(0, 1),
                    help="IK branch used at every subtask with --configurations fixed "
                         "(0 elbow-down, 1 elbow-up; default 0)")
     p.add_argument("--configurations", choices=CONFIGURATION_MODES, default=None,

@@ -176,3 +176,51 @@ def test_a_closed_standard_output_is_a_failed_run_in_one_line() -> None:
     assert proc.returncode == 1, proc.stderr
     assert err[-1] == "subtask-opt: failed: standard output was closed before the run finished"
     assert not any("Exception ignored" in line or "Traceback" in line for line in err)
+
+
+def _every_option(parser, path=()):
+    """(command path, action) of every option of every subcommand."""
+    import argparse
+
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _every_option(sub, (*path, name))
+        elif action.option_strings:
+            yield path, action
+
+
+def test_no_option_reads_a_number_with_the_builtin_parsers() -> None:
+    # Python's float() and int() read Arabic-Indic, full-width and mathematical digits
+    # ("٣", "１", "𝟙"), which an option never means: every numeric option goes through
+    # the ASCII-checking parsers of cli._common, on every command
+    from subtask_opt.cli.app import build_parser
+
+    builtin = [(" ".join(path), action.option_strings[0])
+               for path, action in _every_option(build_parser())
+               if action.type in (float, int, complex)]
+    assert builtin == []
+
+
+@pytest.mark.parametrize("digit", ["\u0663", "\uff11", "\U0001d7d9"])
+def test_reactive_numbers_in_other_scripts_are_refused(digit, capsys) -> None:
+    for option in ("--noise", "--range", "--max-speed", "--max-turn-rate", "--dt"):
+        assert main(["plan", "reactive", "--world", "simple", option, digit]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and option in err[0]
+
+
+def test_a_huge_subtask_file_among_good_ones_fails_only_its_job(tmp_path, capsys):
+    from subtask_opt.base.files import MAX_FILE_BYTES
+
+    good = tmp_path / "good.csv"
+    good.write_text("x,y\n0.30,0.10\n0.35,0.22\n0.25,0.30\n")
+    huge = tmp_path / "huge.csv"
+    with huge.open("wb") as f:  # sparse: the size without the disk
+        f.truncate(MAX_FILE_BYTES + 1)
+    out = tmp_path / "b.json"
+    assert main(["batch", str(good), str(huge), "--json", str(out), "--workers", "0",
+                 "--max-generations", "3", "--no-progress"]) == 1
+    jobs = {j["id"]: j for j in json.loads(out.read_text())["jobs"]}
+    assert jobs[str(good)]["success"] and not jobs[str(huge)]["success"]
+    assert "bytes" in jobs[str(huge)]["error"] and str(MAX_FILE_BYTES) in jobs[str(huge)]["error"]
