@@ -63,6 +63,11 @@ from subtask_opt.tour.permutation import (
     make_aux,
     neighbour_table,
 )
+from subtask_opt.tour.pinned_clustered import (
+    PinnedClusteredData,
+    make_data,
+    make_pinned_clustered_aux,
+)
 from subtask_opt.tour.precedence import PinnedAux, make_pinned_aux
 from subtask_opt.tour.problem import (
     MAX_NODES,
@@ -377,10 +382,11 @@ def solve(problem: TourProblem, *, seed: int = 0,
             (:class:`~subtask_opt.tour.constraints.TourConstraints`); default a
             closed tour from the problem's ``first``. Open paths and homes are
             matrix transforms of the closed tour; precedence and a fixed end use
-            the pinned-permutation GA (:mod:`subtask_opt.tour.precedence`). With
-            a clustered problem and precedence or a fixed end, the order is
-            searched on the cheapest-node costs and the nodes of that order are
-            then decoded exactly (a heuristic; the bound stays valid).
+            the pinned-permutation GA (:mod:`subtask_opt.tour.precedence`); with
+            a clustered problem, its pinned clustered kind
+            (:mod:`subtask_opt.tour.pinned_clustered`), which chooses every
+            cluster's node exactly during the search (the bound is the one of the
+            relaxation without precedence, so it stays valid).
     """
     if not isinstance(problem, (MatrixProblem, ClusteredProblem, GtspProblem)):
         raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem, GtspProblem or "
@@ -401,7 +407,7 @@ def solve(problem: TourProblem, *, seed: int = 0,
     n = problem.size
     paper = params.preset == "paper"
     tensor = None
-    data: np.ndarray | ConfiguredData
+    data: np.ndarray | ConfiguredData | PinnedClusteredData
     cdata = None
     if configured:
         from subtask_opt.tour.configurations import pack_data
@@ -436,10 +442,14 @@ def solve(problem: TourProblem, *, seed: int = 0,
             symmetric = problem.symmetric and not canon.open_path
             search = SEARCH_FAST if symmetric else SEARCH_EXACT
     if canon.needs_pins:
-        # precedence or a fixed end: operators that keep both (tour/precedence.py), over the
-        # cheapest-configuration times when the configurations are decoded afterwards
-        data = np.ascontiguousarray(dist)
-        kind = Kind.PINNED_PERMUTATION
+        # precedence or a fixed end: operators that keep both (tour/precedence.py); with
+        # clusters the nodes are chosen exactly during the search (tour/pinned_clustered.py)
+        if isinstance(data, ConfiguredData):
+            data = make_data(data.dist, data, lns=data.lns)
+            kind = Kind.PINNED_CLUSTERED
+        else:
+            data = np.ascontiguousarray(dist)
+            kind = Kind.PINNED_PERMUTATION
         if stop is None and not paper:
             # precedence makes local optima deeper (fewer moves are feasible): a longer stall
             criteria = [NoImprovement(max(PINNED_STALL, n // 2)), MaxGenerations(50_000)]
@@ -453,6 +463,8 @@ def solve(problem: TourProblem, *, seed: int = 0,
     aux: PinnedAux | PermutationAux
     if kind == Kind.PINNED_PERMUTATION:
         aux = make_pinned_aux(n, canon.first, canon.last, canon.pairs)
+    elif kind == Kind.PINNED_CLUSTERED:
+        aux = make_pinned_clustered_aux(n, canon.first, canon.last, canon.pairs)
     else:
         aux = make_aux(neighbours, nearest_fallback=not paper,
                        grasp_share=params.grasp_share, max_segment=params.max_segment,
