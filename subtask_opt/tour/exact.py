@@ -1163,7 +1163,7 @@ def milp_pinned_clustered(cost: np.ndarray, clusters: np.ndarray | Sequence[int]
         for v in range(m):
             idx = np.concatenate([order[bounds[v]:bounds[v + 1]], [n_arcs + v]]).astype(np.int32)
             h.addRow(0.0, 0.0, len(idx), idx, np.concatenate([np.ones(len(idx) - 1), [-1.0]]))
-    between = {}
+    between: dict[tuple[int, int], list[int]] = {}
     for a in range(n_arcs):
         between.setdefault((int(ct[a]), int(ch[a])), []).append(a)
     for i in others:
@@ -1172,7 +1172,7 @@ def milp_pinned_clustered(cost: np.ndarray, clusters: np.ndarray | Sequence[int]
                 continue
             ij = between.get((i, j), [])
             ji = between.get((j, i), [])
-            for (x, y, fw, bw) in ((i, j, ij, ji), (j, i, ji, ij)):
+            for x, y, fw, bw in ((i, j, ij, ji), (j, i, ji, ij)):
                 # u_x - u_y + (n - 1) z_xy + (n - 3) z_yx <= n - 2
                 idx = np.array([u[x], u[y], *fw, *bw], dtype=np.int32)
                 val = np.array([1.0, -1.0] + [n - 1.0] * len(fw) + [n - 3.0] * len(bw))
@@ -1193,8 +1193,8 @@ def milp_pinned_clustered(cost: np.ndarray, clusters: np.ndarray | Sequence[int]
     if status != highspy.HighsModelStatus.kOptimal:
         raise SubtaskOptError(f"HiGHS did not solve the precedence-constrained GTSP: "
                               f"{h.modelStatusToString(status)}")
-    x = np.asarray(h.getSolution().col_value)[:n_arcs] > 0.5
-    nxt = dict(zip(tail[x].tolist(), head[x].tolist(), strict=True))
+    used = np.asarray(h.getSolution().col_value)[:n_arcs] > 0.5
+    nxt = dict(zip(tail[used].tolist(), head[used].tolist(), strict=True))
     start = next(v for v in nxt if cl[v] == first)
     nodes = [start]
     while len(nodes) < n:
