@@ -375,8 +375,9 @@ def solve(problem: TourProblem, *, seed: int = 0,
         progress: show a progress bar on stderr (a terminal only) for runs over a second.
         certify: prove optimality within ``certify_time_limit`` seconds with an exact
             method (a MILP over the order for fixed configurations; branch and cut over
-            order and configurations when they are chosen, closed tours without
-            precedence); the outcome is in :attr:`Result.certified`.
+            order and configurations when they are chosen, or with precedence or an open
+            path the arc MILP of :func:`~subtask_opt.tour.exact.milp_pinned_clustered`);
+            the outcome is in :attr:`Result.certified`.
         constraints: the tour shape (closed from a start, open to a fixed or
             free end, a home visited first and last) and precedence pairs
             (:class:`~subtask_opt.tour.constraints.TourConstraints`); default a
@@ -579,19 +580,19 @@ def _certify(problem: TourProblem, canon: Canonical, total: float,
 
     Chosen configurations (``configs``): the generalised-TSP branch and cut
     (:func:`~subtask_opt.tour.exact.gtsp_optimum`, this answer as its incumbent) for a
-    closed tour without precedence. Fixed configurations: a symmetric closed tour uses
-    the subtour-cut MILP; anything else (asymmetric costs, an open path, a home,
-    precedence) the MTZ MILP of the canonical form.
+    closed tour without precedence, else the arc MILP with cluster positions
+    (:func:`~subtask_opt.tour.exact.milp_pinned_clustered`; small problems). Fixed
+    configurations: a symmetric closed tour uses the subtour-cut MILP; anything else
+    (asymmetric costs, an open path, a home, precedence) the MTZ MILP of the canonical form.
     """
     from subtask_opt.tour.exact import milp_optimum, milp_pinned
 
     require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
     try:
         if configs is not None:
-            if canon.open_path or canon.pairs.size:
-                return ("not certified: with chosen configurations only closed tours "
-                        "without precedence are certified")
-            if isinstance(problem, GtspProblem):
+            if canon.open_path or canon.needs_pins:
+                optimum = _pinned_clustered_optimum(problem, canon, time_limit)
+            elif isinstance(problem, GtspProblem):
                 from subtask_opt.tour.exact import gtsp_set_optimum
 
                 optimum = gtsp_set_optimum(problem, incumbent=configs[tour],
@@ -616,6 +617,32 @@ def _certify(problem: TourProblem, canon: Canonical, total: float,
         return "optimal (proven)"
     excess = 100 * (total / optimum - 1)
     return f"not optimal: the proven optimum is {optimum:.6g} ({excess:.4f}% less)"
+
+
+def _pinned_clustered_optimum(problem: TourProblem, canon: Canonical,
+                              time_limit: float) -> float:
+    """The proven optimum of a clustered problem's canonical form (pins, precedence, an
+    open path's free return) by the arc MILP over every node
+    (:func:`~subtask_opt.tour.exact.milp_pinned_clustered`)."""
+    from subtask_opt.tour.exact import milp_pinned_clustered
+
+    if isinstance(problem, GtspProblem):
+        w = np.array(problem.weights, dtype=float)
+        clusters = np.asarray(problem.sets, dtype=np.int64)
+        if canon.open_path:
+            into = clusters == canon.first
+            rows = slice(None) if canon.last < 0 else clusters == canon.last
+            w[np.ix_(np.arange(len(w))[rows], np.flatnonzero(into))] = 0.0
+    else:
+        assert isinstance(problem, ClusteredProblem)
+        t = transform_tensor(problem.costs, canon)
+        t[~problem.present] = np.inf  # absent nodes: no arc out ...
+        t[:, :, ~problem.present] = np.inf  # ... and none in
+        n, k = t.shape[:2]
+        w = t.reshape(n * k, n * k)
+        clusters = np.repeat(np.arange(n), k)
+    return milp_pinned_clustered(w, clusters, canon.first, canon.last, canon.pairs,
+                                 time_limit=time_limit)[0]
 
 
 def proven_configured_optimum(problem: ClusteredProblem, tour: np.ndarray,

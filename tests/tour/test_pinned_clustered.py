@@ -241,3 +241,18 @@ def test_pcgtsp_reaches_the_proven_optimum(name, optimum):
                           stop=[TargetCost(optimum + 1e-9), NoImprovement(200)])
     assert instance.violations(solution.tour) == []
     assert solution.cost == optimum
+
+
+@pytest.mark.parametrize("shape", SHAPES)
+def test_certify_proves_the_precedence_optimum(shape):
+    w, sets = _instance(21, 6, symmetric=False, forbid=0.1)
+    c = _shape(shape, _pairs(21, 6, 3), 6)
+    result = solve(GtspProblem(w, sets), seed=0, constraints=c, certify=True)
+    assert result.total_time == pytest.approx(_brute_force(w, sets, c))
+    assert result.certified == "optimal (proven)"
+    tensor = _two_elbow_tensor(22, 6)
+    clustered = solve(ClusteredProblem(tensor), seed=0, constraints=c, certify=True)
+    assert clustered.certified == "optimal (proven)"
+    flat = tensor.reshape(12, 12)
+    assert clustered.total_time == pytest.approx(
+        _brute_force(flat, np.repeat(np.arange(6), 2), c), rel=1e-9)
