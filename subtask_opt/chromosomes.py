@@ -21,6 +21,7 @@ SOURCES: dict[Kind, str] = {
     Kind.CONFIGURED_PERMUTATION: "subtask_opt.tour.clustered",
     Kind.WAYPOINT_PATH: "subtask_opt.planners.grid._waypoint_kernels",
     Kind.PINNED_PERMUTATION: "subtask_opt.tour.precedence",
+    Kind.PINNED_CLUSTERED: "subtask_opt.tour.pinned_clustered",
 }
 """Kind -> the module whose ``OPERATORS`` (an :class:`~subtask_opt.ga.dispatch.OperatorSet`)
 are that kind's five operators."""

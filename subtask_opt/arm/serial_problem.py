@@ -438,9 +438,9 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
     ``constraints.start`` is the first target and ``constraints.end`` the last one;
     precedence pairs ``(a, b)`` put target a before b. A plain tour searches order and
     configurations together (the clustered GA, decoded exactly by a layered shortest
-    path); precedence or a fixed first or last target search the order with the
-    pinned-permutation GA over the cheapest legs between targets, then decode the
-    configurations of that order exactly (as for a planar arm).
+    path); precedence or a fixed first or last target use the pinned clustered GA
+    (:mod:`subtask_opt.tour.pinned_clustered`), which keeps every pair and chooses the
+    configurations exactly during the search.
 
     The first round runs the micro-GA (``stop``; default ``params.default_stop(n)``;
     ``params.runs`` independent runs, default one).
@@ -571,7 +571,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
         make_aux,
         neighbour_table,
     )
-    from subtask_opt.tour.precedence import make_pinned_aux
+    from subtask_opt.tour.pinned_clustered import make_data, make_pinned_clustered_aux
     from subtask_opt.tour.problem import MatrixProblem
     from subtask_opt.tour.solve import PINNED_STALL, _relaxation_bound, _rotate
 
@@ -656,12 +656,13 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                     progress, total=total, desc=f"micro-GA round {ga_rounds}",
                     unit="gen") as bar:
                 on_chunk = _reporter(bar)
-                if shape.pinned:
+                if shape.pinned:  # the order and the configurations together, pairs kept
                     costs = np.array(canon.matrix)
                     costs[:n, :n] = data.dist
-                    pinned = make_pinned_aux(n + 1, canon.first, canon.last, canon.pairs)
-                    outcome = run_ga(use(Kind.PINNED_PERMUTATION), config,
-                                     np.ascontiguousarray(costs), pinned, max_genes=n + 1,
+                    pinned = make_pinned_clustered_aux(n + 1, canon.first, canon.last,
+                                                       canon.pairs)
+                    outcome = run_ga(use(Kind.PINNED_CLUSTERED), config,
+                                     make_data(costs, data, home=n), pinned, max_genes=n + 1,
                                      seed=seed, criteria=criteria, on_chunk=on_chunk,
                                      runs=params.runs or 1)
                     genes = _rotate(outcome.genes, n)[1:].astype(np.int64)

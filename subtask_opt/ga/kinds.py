@@ -20,6 +20,9 @@ class Kind(IntEnum):
     PINNED_PERMUTATION = 3
     """A closed tour with a pinned first (and maybe last) node and precedence pairs
     (:mod:`subtask_opt.tour.precedence`)."""
+    PINNED_CLUSTERED = 4
+    """A pinned permutation of clusters whose nodes are decoded exactly (precedence with
+    configurations: :mod:`subtask_opt.tour.pinned_clustered`)."""
 
 
 # Numba sees a kind through the *type* of a tag argument: a distinct NamedTuple
@@ -41,10 +44,15 @@ class PinnedPermutationTag(NamedTuple):
     kind: int = Kind.PINNED_PERMUTATION
 
 
+class PinnedClusteredTag(NamedTuple):
+    kind: int = Kind.PINNED_CLUSTERED
+
+
 TAGS: dict[Kind, type] = {Kind.PERMUTATION: PermutationTag,
                           Kind.CONFIGURED_PERMUTATION: ConfiguredPermutationTag,
                           Kind.WAYPOINT_PATH: WaypointPathTag,
-                          Kind.PINNED_PERMUTATION: PinnedPermutationTag}
+                          Kind.PINNED_PERMUTATION: PinnedPermutationTag,
+                          Kind.PINNED_CLUSTERED: PinnedClusteredTag}
 
 
 def tag(kind: Kind) -> tuple[int]:

@@ -720,6 +720,42 @@ def gtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
     return float(c[tour, np.roll(tour, -1)].sum()), cl[tour], tour
 
 
+def gtsp_lp_bound(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
+                  time_limit: float | None = None, max_rounds: int = 500) -> float:
+    """A lower bound of the symmetric generalised TSP: the LP relaxation of
+    :func:`gtsp_optimum`'s model (one node per cluster, degree 2 y_v) after as many rounds
+    of cluster subtour cuts and generalised cut constraints as ``time_limit`` seconds
+    allow. Every round's LP optimum is a valid bound (the cuts hold for every tour), and
+    the rounds only raise it; the last one solved is returned. Much tighter than the
+    bound of the cheapest arcs between clusters when clusters overlap (GTSPLIB's 11eil51:
+    174, the optimum, where Held-Karp on those arcs gives 98).
+
+    Raises:
+        SubtaskOptError: not even the first LP was solved within ``time_limit``.
+    """
+    c = _square_matrix(cost)
+    if not np.allclose(c, c.T, rtol=1e-9, atol=1e-12):
+        raise ParameterError("gtsp_lp_bound needs a symmetric cost matrix")
+    cl = np.asarray(clusters)
+    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
+        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
+                             f"got shape {cl.shape} of {cl.dtype}")
+    n = int(cl.max()) + 1
+    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
+        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
+                             f"got {sorted(set(cl.tolist()))}")
+    deadline = None if time_limit is None else time.perf_counter() + float(time_limit)
+    model = _GtspModel(c, cl.astype(np.int64))
+    try:
+        model.root_cuts(max_rounds, deadline, bound_only=True)
+    except SubtaskOptError:
+        pass  # out of time or rounds: the last LP solved still bounds every tour
+    bound = model.best_lp_bound
+    if not math.isfinite(bound):
+        raise SubtaskOptError("gtsp_lp_bound: no LP solved within the time limit")
+    return float(bound)
+
+
 class _GtspModel:
     """The GTSP edge MILP of :func:`gtsp_optimum` in HiGHS; cuts added as needed."""
 
@@ -818,12 +854,20 @@ class _GtspModel:
     def _cut_subtours(self, comps: list[list[int]]) -> None:
         self._add_cuts([np.isin(self.sub, comp) for comp in comps], None)
 
-    def root_cuts(self, max_rounds: int, deadline: float | None) -> None:
+    best_lp_bound = -math.inf
+    """The largest LP optimum of :meth:`root_cuts` so far (a lower bound of every tour)."""
+
+    def root_cuts(self, max_rounds: int, deadline: float | None,
+                  bound_only: bool = False) -> None:
         """Rounds of cuts on the LP relaxation until none is violated; then the cuts
-        that are slack at the final LP point are dropped (a lighter LP to branch on)."""
+        that are slack at the final LP point are dropped (a lighter LP to branch on).
+        Each LP's optimum is recorded in :attr:`best_lp_bound`; ``bound_only``: stop
+        after the cuts, no clean-up."""
         n_rows = self.n + self.m
         for _ in range(max_rounds):
             sol = self._run(deadline)
+            self.best_lp_bound = max(self.best_lp_bound,
+                                     float(self.h.getInfo().objective_function_value))
             x, y = sol[:self.n_edges], sol[self.n_edges:]
             comps = self._cluster_components(x)
             if len(comps) > 1:
@@ -845,6 +889,8 @@ class _GtspModel:
         else:
             raise SubtaskOptError(f"gtsp_optimum: cuts still violated after {max_rounds} "
                                   f"rounds")
+        if bound_only:
+            return
         final = self.h.getSolution()
         if self.incumbent is not None:  # reduced-cost fixing against the incumbent
             bound = self.h.getInfo().objective_function_value
@@ -1082,3 +1128,122 @@ def gtsp_set_optimum(problem: Any, *, incumbent: np.ndarray | Sequence[int] | No
     else:
         cost, _, nodes = agtsp_optimum(w, sets, incumbent=incumbent, time_limit=time_limit)
     return cost, nodes
+
+
+def milp_pinned_clustered(cost: np.ndarray, clusters: np.ndarray | Sequence[int],
+                          first: int = 0, last: int = -1,
+                          pairs: np.ndarray | Sequence[tuple[int, int]] = (), *,
+                          time_limit: float | None = None
+                          ) -> tuple[float, np.ndarray, np.ndarray]:
+    """Certified minimum closed tour through one node of every cluster that starts in
+    cluster ``first``, ends in ``last`` (if >= 0) and keeps the cluster pairs ``(a, b)``
+    (a before b): the precedence-constrained generalised TSP, any costs (inf: forbidden).
+
+    Arc MILP in HiGHS: binary ``x_uv`` per finite arc between nodes of different clusters
+    and ``y_v`` per node, one node per cluster, one arc in and out of a chosen node and
+    none at the others; Miller-Tucker-Zemlin positions of the clusters other than
+    ``first`` over the summed arcs between two clusters (lifted as Desrochers and Laporte
+    do), bounded by the transitive closure of the pairs; ``(a, b)`` is ``u_a + 1 <= u_b``;
+    a pinned end takes an arc from ``last`` into ``first``. Zero gap, nothing printed.
+
+    Returns ``(cost, order, nodes)``: the clusters in tour order from ``first`` and the
+    node visited in each. Raises :class:`SubtaskOptError` if no tour keeps the rules or
+    none is proven optimal within ``time_limit`` seconds.
+    """
+    c = np.asarray(cost, dtype=float)
+    if c.ndim != 2 or c.shape[0] != c.shape[1] or c.shape[0] < 3 or np.isnan(c).any():
+        raise ParameterError(f"milp_pinned_clustered needs a square cost matrix of at least "
+                             f"3 x 3 (inf: forbidden), got shape {c.shape}")
+    cl = np.asarray(clusters)
+    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
+        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
+                             f"got shape {cl.shape} of {cl.dtype}")
+    n = int(cl.max()) + 1
+    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
+        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
+                             f"got {sorted(set(cl.tolist()))}")
+    p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    if not 0 <= first < n or not -1 <= last < n or last == first:
+        raise ParameterError(f"first={first} and last={last} must be distinct clusters in "
+                             f"0..{n - 1} (last -1: free)")
+    if p.size and (p.min() < 0 or p.max() >= n):
+        raise ParameterError(f"precedence pairs must name clusters in 0..{n - 1}")
+    if any(b == first for _, b in p.tolist()):
+        raise SubtaskOptError(f"no tour keeps the pairs: one ends in the start {first}")
+    try:
+        import highspy
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise SubtaskOptError("milp_pinned_clustered needs highspy") from exc
+    before = _precedence_closure(n, first, last, p)
+    if np.any(np.diag(before)):
+        raise SubtaskOptError("no tour keeps the pairs: they form a cycle")
+    ancestors = before.sum(axis=0)
+    descendants = before.sum(axis=1)
+    m = c.shape[0]
+    tail, head = np.nonzero((cl[:, None] != cl[None, :]) & np.isfinite(c))
+    ct, ch = cl[tail], cl[head]
+    n_arcs = len(tail)
+    deadline = None if time_limit is None else time.perf_counter() + float(time_limit)
+    with quiet_stdout():
+        h = highspy.Highs()
+    h.setOptionValue("output_flag", False)
+    h.setOptionValue("mip_rel_gap", 0.0)
+    inf = highspy.kHighsInf
+    empty_i = np.array([], dtype=np.int32)
+    upper = np.ones(n_arcs + m)
+    # an arc against the closure of the pairs is never used
+    upper[:n_arcs][(ch != first) & before[ch, ct]] = 0.0
+    h.addCols(n_arcs + m, np.concatenate([c[tail, head], np.zeros(m)]), np.zeros(n_arcs + m),
+              upper, 0, empty_i, empty_i, np.array([]))
+    others = [k for k in range(n) if k != first]
+    u = {k: n_arcs + m + i for i, k in enumerate(others)}
+    h.addCols(n - 1, np.zeros(n - 1), np.array([float(max(1, ancestors[k])) for k in others]),
+              np.array([n - 1.0 - descendants[k] for k in others]), 0, empty_i, empty_i,
+              np.array([]))
+    for k in range(n):  # one node per cluster
+        idx = (n_arcs + np.flatnonzero(cl == k)).astype(np.int32)
+        h.addRow(1.0, 1.0, len(idx), idx, np.ones(len(idx)))
+    for ends in (tail, head):  # one arc out of (into) a chosen node, none elsewhere
+        order = np.argsort(ends, kind="stable")
+        bounds = np.searchsorted(ends[order], np.arange(m + 1))
+        for v in range(m):
+            idx = np.concatenate([order[bounds[v]:bounds[v + 1]], [n_arcs + v]]).astype(np.int32)
+            h.addRow(0.0, 0.0, len(idx), idx, np.concatenate([np.ones(len(idx) - 1), [-1.0]]))
+    between: dict[tuple[int, int], list[int]] = {}
+    for a in range(n_arcs):
+        between.setdefault((int(ct[a]), int(ch[a])), []).append(a)
+    for i in others:
+        for j in others:
+            if i >= j:
+                continue
+            ij = between.get((i, j), [])
+            ji = between.get((j, i), [])
+            for x, y, fw, bw in ((i, j, ij, ji), (j, i, ji, ij)):
+                # u_x - u_y + (n - 1) z_xy + (n - 3) z_yx <= n - 2
+                idx = np.array([u[x], u[y], *fw, *bw], dtype=np.int32)
+                val = np.array([1.0, -1.0] + [n - 1.0] * len(fw) + [n - 3.0] * len(bw))
+                h.addRow(-inf, n - 2.0, len(idx), idx, val)
+    for a, b in p.tolist():
+        if a != first:
+            h.addRow(-inf, -1.0, 2, np.array([u[a], u[b]], dtype=np.int32),
+                     np.array([1.0, -1.0]))
+    if last >= 0:
+        idx = np.array(between.get((last, first), []), dtype=np.int32)
+        h.addRow(1.0, 1.0, len(idx), idx, np.ones(len(idx)))
+    late = "milp_pinned_clustered: not proven within the time limit"
+    h.changeColsIntegrality(n_arcs + m, np.arange(n_arcs + m, dtype=np.int32),
+                            np.full(n_arcs + m, highspy.HighsVarType.kInteger))
+    status = _run_highs(h, deadline, late)
+    if status == highspy.HighsModelStatus.kInfeasible:
+        raise SubtaskOptError("milp_pinned_clustered: no tour keeps the rules")
+    if status != highspy.HighsModelStatus.kOptimal:
+        raise SubtaskOptError(f"HiGHS did not solve the precedence-constrained GTSP: "
+                              f"{h.modelStatusToString(status)}")
+    used = np.asarray(h.getSolution().col_value)[:n_arcs] > 0.5
+    nxt = dict(zip(tail[used].tolist(), head[used].tolist(), strict=True))
+    start = next(v for v in nxt if cl[v] == first)
+    nodes = [start]
+    while len(nodes) < n:
+        nodes.append(nxt[nodes[-1]])
+    out = np.array(nodes, dtype=np.int64)
+    return float(c[out, np.roll(out, -1)].sum()), cl[out].astype(np.int64), out

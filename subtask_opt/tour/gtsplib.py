@@ -529,6 +529,9 @@ class _Parser:
 
 BOUND_SHARE = 0.25
 """Least share of :func:`solve_gtsp`'s time limit the lower bound may use."""
+LP_BOUND_MAX_VERTICES = 300
+"""The most vertices of a symmetric file whose bound also tries the LP relaxation (its
+model has M^2 / 2 edge columns; building it for more would overrun the bound's time)."""
 CERTIFY_MIN_S = 60.0
 """Least time :func:`solve_gtsp`'s certificate may take."""
 
@@ -543,7 +546,10 @@ class GtspSolution:
             ``tour + 1``), from the start set when the file names one.
         cost: the closed tour's cost recomputed from the file's weights.
         lower_bound: no tour is cheaper: the Held-Karp bound of the cheapest arcs between
-            the sets (a relaxation without the precedence).
+            the sets (a relaxation without the precedence), or, if higher, for symmetric
+            files up to :data:`LP_BOUND_MAX_VERTICES` vertices, the LP relaxation of the
+            vertex model with generalised cuts (:func:`~subtask_opt.tour.exact.gtsp_lp_bound`)
+            in the time the bound gets.
         runtime_s: wall time of the search, the bound and the certificate together
             (numba's compilation never included).
         search_runtime_s, bound_runtime_s: the search's and the bound's part.
@@ -631,6 +637,17 @@ def solve_gtsp(instance: GtspInstance, *, time_limit: float = 10.0, seed: int = 
     m[~np.isfinite(m)] = penalty_for_legs(m, problem.size)
     bound = min(lower_bound(m, upper=max(cost, 1e-9) if cost > 0 else None, seed=seed,
                             time_limit=budget), cost)
+    left = budget - (time.perf_counter() - bound_started)
+    if (left > 0 and problem.vertex_count <= LP_BOUND_MAX_VERTICES and problem.symmetric
+            and np.all(np.isfinite(problem.weights))):
+        from subtask_opt.base.errors import SubtaskOptError
+        from subtask_opt.tour.exact import gtsp_lp_bound
+
+        try:  # the LP relaxation over the vertices: far tighter where the sets overlap
+            bound = max(bound, min(gtsp_lp_bound(problem.weights, problem.sets,
+                                                 time_limit=left), cost))
+        except SubtaskOptError:
+            pass  # no LP solved in the time left: the Held-Karp bound stands
     bound_s = time.perf_counter() - bound_started
     certified = None
     if certify:

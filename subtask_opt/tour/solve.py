@@ -63,6 +63,11 @@ from subtask_opt.tour.permutation import (
     make_aux,
     neighbour_table,
 )
+from subtask_opt.tour.pinned_clustered import (
+    PinnedClusteredData,
+    make_data,
+    make_pinned_clustered_aux,
+)
 from subtask_opt.tour.precedence import PinnedAux, make_pinned_aux
 from subtask_opt.tour.problem import (
     MAX_NODES,
@@ -370,17 +375,19 @@ def solve(problem: TourProblem, *, seed: int = 0,
         progress: show a progress bar on stderr (a terminal only) for runs over a second.
         certify: prove optimality within ``certify_time_limit`` seconds with an exact
             method (a MILP over the order for fixed configurations; branch and cut over
-            order and configurations when they are chosen, closed tours without
-            precedence); the outcome is in :attr:`Result.certified`.
+            order and configurations when they are chosen, or with precedence or an open
+            path the arc MILP of :func:`~subtask_opt.tour.exact.milp_pinned_clustered`);
+            the outcome is in :attr:`Result.certified`.
         constraints: the tour shape (closed from a start, open to a fixed or
             free end, a home visited first and last) and precedence pairs
             (:class:`~subtask_opt.tour.constraints.TourConstraints`); default a
             closed tour from the problem's ``first``. Open paths and homes are
             matrix transforms of the closed tour; precedence and a fixed end use
-            the pinned-permutation GA (:mod:`subtask_opt.tour.precedence`). With
-            a clustered problem and precedence or a fixed end, the order is
-            searched on the cheapest-node costs and the nodes of that order are
-            then decoded exactly (a heuristic; the bound stays valid).
+            the pinned-permutation GA (:mod:`subtask_opt.tour.precedence`); with
+            a clustered problem, its pinned clustered kind
+            (:mod:`subtask_opt.tour.pinned_clustered`), which chooses every
+            cluster's node exactly during the search (the bound is the one of the
+            relaxation without precedence, so it stays valid).
     """
     if not isinstance(problem, (MatrixProblem, ClusteredProblem, GtspProblem)):
         raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem, GtspProblem or "
@@ -401,7 +408,7 @@ def solve(problem: TourProblem, *, seed: int = 0,
     n = problem.size
     paper = params.preset == "paper"
     tensor = None
-    data: np.ndarray | ConfiguredData
+    data: np.ndarray | ConfiguredData | PinnedClusteredData
     cdata = None
     if configured:
         from subtask_opt.tour.configurations import pack_data
@@ -436,10 +443,14 @@ def solve(problem: TourProblem, *, seed: int = 0,
             symmetric = problem.symmetric and not canon.open_path
             search = SEARCH_FAST if symmetric else SEARCH_EXACT
     if canon.needs_pins:
-        # precedence or a fixed end: operators that keep both (tour/precedence.py), over the
-        # cheapest-configuration times when the configurations are decoded afterwards
-        data = np.ascontiguousarray(dist)
-        kind = Kind.PINNED_PERMUTATION
+        # precedence or a fixed end: operators that keep both (tour/precedence.py); with
+        # clusters the nodes are chosen exactly during the search (tour/pinned_clustered.py)
+        if isinstance(data, ConfiguredData):
+            data = make_data(data.dist, data, lns=data.lns)
+            kind = Kind.PINNED_CLUSTERED
+        else:
+            data = np.ascontiguousarray(dist)
+            kind = Kind.PINNED_PERMUTATION
         if stop is None and not paper:
             # precedence makes local optima deeper (fewer moves are feasible): a longer stall
             criteria = [NoImprovement(max(PINNED_STALL, n // 2)), MaxGenerations(50_000)]
@@ -453,6 +464,8 @@ def solve(problem: TourProblem, *, seed: int = 0,
     aux: PinnedAux | PermutationAux
     if kind == Kind.PINNED_PERMUTATION:
         aux = make_pinned_aux(n, canon.first, canon.last, canon.pairs)
+    elif kind == Kind.PINNED_CLUSTERED:
+        aux = make_pinned_clustered_aux(n, canon.first, canon.last, canon.pairs)
     else:
         aux = make_aux(neighbours, nearest_fallback=not paper,
                        grasp_share=params.grasp_share, max_segment=params.max_segment,
@@ -567,19 +580,19 @@ def _certify(problem: TourProblem, canon: Canonical, total: float,
 
     Chosen configurations (``configs``): the generalised-TSP branch and cut
     (:func:`~subtask_opt.tour.exact.gtsp_optimum`, this answer as its incumbent) for a
-    closed tour without precedence. Fixed configurations: a symmetric closed tour uses
-    the subtour-cut MILP; anything else (asymmetric costs, an open path, a home,
-    precedence) the MTZ MILP of the canonical form.
+    closed tour without precedence, else the arc MILP with cluster positions
+    (:func:`~subtask_opt.tour.exact.milp_pinned_clustered`; small problems). Fixed
+    configurations: a symmetric closed tour uses the subtour-cut MILP; anything else
+    (asymmetric costs, an open path, a home, precedence) the MTZ MILP of the canonical form.
     """
     from subtask_opt.tour.exact import milp_optimum, milp_pinned
 
     require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
     try:
         if configs is not None:
-            if canon.open_path or canon.pairs.size:
-                return ("not certified: with chosen configurations only closed tours "
-                        "without precedence are certified")
-            if isinstance(problem, GtspProblem):
+            if canon.open_path or canon.needs_pins:
+                optimum = _pinned_clustered_optimum(problem, canon, time_limit)
+            elif isinstance(problem, GtspProblem):
                 from subtask_opt.tour.exact import gtsp_set_optimum
 
                 optimum = gtsp_set_optimum(problem, incumbent=configs[tour],
@@ -604,6 +617,32 @@ def _certify(problem: TourProblem, canon: Canonical, total: float,
         return "optimal (proven)"
     excess = 100 * (total / optimum - 1)
     return f"not optimal: the proven optimum is {optimum:.6g} ({excess:.4f}% less)"
+
+
+def _pinned_clustered_optimum(problem: TourProblem, canon: Canonical,
+                              time_limit: float) -> float:
+    """The proven optimum of a clustered problem's canonical form (pins, precedence, an
+    open path's free return) by the arc MILP over every node
+    (:func:`~subtask_opt.tour.exact.milp_pinned_clustered`)."""
+    from subtask_opt.tour.exact import milp_pinned_clustered
+
+    if isinstance(problem, GtspProblem):
+        w = np.array(problem.weights, dtype=float)
+        clusters = np.asarray(problem.sets, dtype=np.int64)
+        if canon.open_path:
+            into = clusters == canon.first
+            rows = slice(None) if canon.last < 0 else clusters == canon.last
+            w[np.ix_(np.arange(len(w))[rows], np.flatnonzero(into))] = 0.0
+    else:
+        assert isinstance(problem, ClusteredProblem)
+        t = transform_tensor(problem.costs, canon)
+        t[~problem.present] = np.inf  # absent nodes: no arc out ...
+        t[:, :, ~problem.present] = np.inf  # ... and none in
+        n, k = t.shape[:2]
+        w = t.reshape(n * k, n * k)
+        clusters = np.repeat(np.arange(n), k)
+    return milp_pinned_clustered(w, clusters, canon.first, canon.last, canon.pairs,
+                                 time_limit=time_limit)[0]
 
 
 def proven_configured_optimum(problem: ClusteredProblem, tour: np.ndarray,

@@ -9,6 +9,9 @@ import pytest
 
 from subtask_opt.base.errors import ParameterError, SubtaskOptError
 from subtask_opt.tour.exact import _pair_cuts, gtsp_optimum, milp_optimum
+from tests.conftest import SHARED_DATA
+
+SHARED_GTSPLIB = SHARED_DATA / "gtsplib"
 
 
 def _instance(seed: int, sizes: list[int], metric: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -183,3 +186,39 @@ def test_time_limit_is_reported():
     cost, clusters = _instance(1, [2] * 40, metric=False)
     with pytest.raises(SubtaskOptError, match="not proven"):
         gtsp_optimum(cost, clusters, time_limit=1e-3)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_lp_bound_never_passes_the_brute_force_optimum(seed):
+    from subtask_opt.tour.bound import lower_bound
+    from subtask_opt.tour.exact import gtsp_lp_bound
+
+    rng = np.random.default_rng(300 + seed)
+    sizes = rng.integers(1, 4, size=int(rng.integers(4, 8))).tolist()
+    cost, clusters = _instance(seed, sizes, metric=seed % 2 == 0)
+    optimum = _brute_force(cost, clusters)
+    bound = gtsp_lp_bound(cost, clusters)
+    assert bound <= optimum * (1 + 1e-9)
+    # at least the Held-Karp bound of the cheapest arcs between the clusters, up to the
+    # subgradient's own slack (its bound is of a relaxation of that LP)
+    n = len(sizes)
+    between = np.full((n, n), np.inf)
+    for i in range(n):
+        for j in range(n):
+            between[i, j] = 0.0 if i == j else cost[np.ix_(clusters == i, clusters == j)].min()
+    assert bound >= lower_bound(between, seed=0) * (1 - 1e-6)
+
+
+@pytest.mark.skipif(not (SHARED_GTSPLIB / "11eil51.gtsp").is_file(),
+                    reason="shared GTSPLIB data not present")
+def test_lp_bound_of_overlapping_sets_beats_the_cluster_bound():
+    from subtask_opt.tour.exact import gtsp_lp_bound, gtsp_set_optimum
+    from subtask_opt.tour.gtsplib import read_gtsplib
+
+    instance = read_gtsplib(SHARED_GTSPLIB / "11eil51.gtsp")
+    optimum, _ = gtsp_set_optimum(instance.problem())  # branch and cut: 174
+    bound = gtsp_lp_bound(instance.weights, instance.sets)
+    assert bound <= optimum * (1 + 1e-9)
+    assert bound > 0.9 * optimum  # the cheapest arcs between the sets bound it at 98
+    with pytest.raises(ParameterError, match="symmetric"):
+        gtsp_lp_bound(np.triu(np.ones((4, 4))), np.arange(4))

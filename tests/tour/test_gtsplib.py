@@ -242,9 +242,8 @@ def test_solve_with_precedence_keeps_it(seed):
     assert all(order.index(a) < order.index(b) for a, b in pairs)
     tour = result.configurations[result.order]
     assert result.total_time == pytest.approx(float(w[tour, np.roll(tour, -1)].sum()))
-    # the order is searched on the cheapest arcs, the vertices decoded after it (issue 27,
-    # item 3 is open): never below the optimum, not always at it
-    assert result.total_time >= _brute_force(w, sets, 0, pairs) - 1e-9
+    # the pinned clustered kind chooses the vertices during the search: the optimum
+    assert result.total_time == pytest.approx(_brute_force(w, sets, 0, pairs))
 
 
 @pytest.mark.parametrize("seed", range(4))
