@@ -424,7 +424,8 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
         keep = ~drop
         home_all = joint_leg_times(home, flat, lim)[0]
         f1, o1, h1 = _subset(flat, offsets, keep, home_all)
-        bound = sl.bound_inputs(f1, o1, points, h1, lim, sl.reach_levers(problem.arm))
+        bound = sl.bound_inputs(f1, o1, points, h1, lim, sl.reach_levers(problem.arm),
+                                k_bound=BOUND_NEIGHBOURS)
         cap_keep = sl.keep_best(f1, o1, points, h1, lim, sl.DEFAULT_CAP)
     dropped = 0
     if checker is not None:
@@ -747,10 +748,17 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
                 memory[a, b] = memory[b, a] = value
 
 
-SPARSE_STALL = 1000
+BOUND_NEIGHBOURS = 120
+"""Nearest pairs (task space) per target whose cheapest leg the sparse bound computes
+exactly (60 left a 2,000-hole panel's bound 9% lower: the closed-form bound of the
+other pairs is then below the tour's typical leg)."""
+SPARSE_STALL = 5000
 """Kicks without a shorter tour after which the sparse search stops (its default stop,
 with :data:`SPARSE_KICKS_PER_TARGET` kicks per target in all)."""
-SPARSE_KICKS_PER_TARGET = 4
+SPARSE_KICKS_PER_TARGET = 20
+SPARSE_REPAIR_KICKS = 2000
+"""Most kicks of a search round after legs were found in collision (the first round has
+the whole budget; ``stop`` applies to each round, a time limit to all of them)."""
 
 
 def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
@@ -787,10 +795,13 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
         if isinstance(c, MaxGenerations):
             kicks = c.generations
     started = time.monotonic()
-    state: dict[str, Any] = {"best": math.inf, "at": 0, "done": 0}
+    # per search round: its first kick, best time and the kick that found it (a repair
+    # round starts afresh: its tour holds legs just blocked, so it is longer than before)
+    state: dict[str, Any] = {"best": math.inf, "at": 0, "done": 0, "start": 0}
 
     def should_stop() -> bool:
-        p = Progress(int(state["done"]), float(state["best"]), int(state["done"] - state["at"]),
+        p = Progress(int(state["done"] - state["start"]), float(state["best"]),
+                     int(state["done"] - state["at"]),
                      time.monotonic() - started)
         return any(c(p) for c in criteria)
 
@@ -805,6 +816,8 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
                                                        unit="kick") as bar:
         while True:
             rounds += 1
+            state.update(best=math.inf, at=done_total, start=done_total)
+            budget = kicks if rounds == 1 else min(kicks, SPARSE_REPAIR_KICKS)
 
             def on_chunk(done: int, best: float, base: int = done_total) -> None:
                 if best < state["best"] - 1e-12:
@@ -816,7 +829,7 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
                 bar.set_postfix_str(f"best {best:.4f}")
 
             out = ts.search(problem.sparse, seed=seed + rounds - 1,
-                            kicks=max(0, kicks - done_total), tour=tour, choice=choice,
+                            kicks=budget, tour=tour, choice=choice,
                             should_stop=should_stop, on_chunk=on_chunk)
             done_total += out.kicks
             tour, choice = out.tour, out.choice
