@@ -67,6 +67,8 @@ def one(n: int, seed: int, legs_mode: str) -> dict[str, Any]:
         "tour_s": result.total_time, "planned_s": planned, "bound_s": bound,
         "gap_pct": None if bound is None else 100 * (planned / bound - 1),
         "fk_miss_m": miss, "kicks_or_generations": result.generations,
+        "search_rounds": result.report.counts["search_rounds"],
+        "legs_infeasible": result.report.counts["legs_infeasible"],
     }
 
 
@@ -168,7 +170,8 @@ def main(argv: list[str] | None = None) -> int:
               f"(compile {c['compile']:.1f}) rss {r['peak_rss_mib']:7.0f} MiB | tour "
               f"{r['tour_s']:8.3f} s bound {r['bound_s'] or math.nan:8.3f} gap "
               f"{r['gap_pct'] if r['gap_pct'] is not None else math.nan:5.2f}% | fk "
-              f"{r['fk_miss_m']:.1e} m", flush=True)
+              f"{r['fk_miss_m']:.1e} m | rounds {r['search_rounds']} legs in collision "
+              f"{r['legs_infeasible']}", flush=True)
     slope = growth(rows)
     print(f"growth exponent (CPU outside compilation, 500-5000 targets): "
           f"{'n/a' if slope is None else f'{slope:.3f}'}")

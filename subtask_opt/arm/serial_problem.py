@@ -757,8 +757,11 @@ SPARSE_STALL = 5000
 with :data:`SPARSE_KICKS_PER_TARGET` kicks per target in all)."""
 SPARSE_KICKS_PER_TARGET = 20
 SPARSE_REPAIR_KICKS = 2000
-"""Most kicks of a search round after legs were found in collision (the first round has
-the whole budget; ``stop`` applies to each round, a time limit to all of them)."""
+"""Most kicks of a search round after legs were found in collision, every
+:data:`SPARSE_REPAIR_EVERY`-th such round (the others only polish: a round per handful of
+legs in collision would otherwise cost kicks each); the first round has the whole
+budget; ``stop`` applies to each round, a time limit to all of them."""
+SPARSE_REPAIR_EVERY = 10
 
 
 def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
@@ -817,7 +820,10 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
         while True:
             rounds += 1
             state.update(best=math.inf, at=done_total, start=done_total)
-            budget = kicks if rounds == 1 else min(kicks, SPARSE_REPAIR_KICKS)
+            # after legs were found in collision: polish only (re-decode around the blocked
+            # legs), with kicks every SPARSE_REPAIR_EVERY rounds
+            budget = kicks if rounds == 1 else (
+                min(kicks, SPARSE_REPAIR_KICKS) if rounds % SPARSE_REPAIR_EVERY == 0 else 0)
 
             def on_chunk(done: int, best: float, base: int = done_total) -> None:
                 if best < state["best"] - 1e-12:

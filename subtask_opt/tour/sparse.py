@@ -553,7 +553,8 @@ share in [0, WALK_SLACK) longer than the best (the walk leaves a local optimum).
 
 
 def _walk(tour: np.ndarray, data: SparseLegs, choice: np.ndarray,
-                  rng: np.random.Generator, kicks: int, window: int) -> tuple[float, int]:
+          rng: np.random.Generator, kicks: int, window: int, cost: float | None = None,
+          ) -> tuple[float, int]:
     """Polish ``tour`` (in place, with ``choice``), then ``kicks`` kicked restarts, the
     best kept; returns (time, kicks that improved). A kick's trial is evaluated locally
     (O(window) per kick, not O(N)): the kick's own change, the configurations around it
@@ -567,7 +568,8 @@ def _walk(tour: np.ndarray, data: SparseLegs, choice: np.ndarray,
     pos[tour[1:n + 1]] = np.arange(1, n + 1)
     pos[n] = 0
     active = np.ones(n, dtype=np.bool_)
-    best = _polish(tour, pos, data, choice, active)
+    # a full polish is O(N): only when the tour's time is not known (the first call)
+    best = _polish(tour, pos, data, choice, active) if cost is None else cost
     wins = 0
     cur, cpos, cchoice = tour.copy(), pos.copy(), choice.copy()
     current = best
@@ -581,32 +583,30 @@ def _walk(tour: np.ndarray, data: SparseLegs, choice: np.ndarray,
         lo = 1 + int(rng.integers(0, n - w + 1))
         before = _stretch(trial, data, tchoice, lo - 1, lo + w)
         _kick_at(trial, tpos, rng, lo, w, active)
-        cost = current - before + _stretch(trial, data, tchoice, lo - 1, lo + w)
+        value = current - before + _stretch(trial, data, tchoice, lo - 1, lo + w)
         # configurations first, so the fixed-configuration moves do not just undo the kick
-        cost -= _decode_window(trial, data, tchoice, lo - 1 - DECODE_MARGIN,
-                               lo + w + DECODE_MARGIN)
+        value -= _decode_window(trial, data, tchoice, lo - 1 - DECODE_MARGIN,
+                                lo + w + DECODE_MARGIN)
         while True:
             g = _two_opt(trial, tpos, data, tchoice, active)
             g += _or_opt(trial, tpos, data, tchoice, active)
             g += _decode_window(trial, data, tchoice, lo - 1 - DECODE_MARGIN,
                                 lo + w + DECODE_MARGIN)
-            cost -= g
+            value -= g
             if g <= 1e-12:
                 break
         active[:] = False
-        if cost < current - 1e-9 or cost < best * (1.0 + WALK_SLACK * rng.random()):
-            current = cost
+        if value < current - 1e-9 or value < best * (1.0 + WALK_SLACK * rng.random()):
+            current = value
             cur[:] = trial
             cpos[:] = tpos
             cchoice[:] = tchoice
-            if cost < best - 1e-9:
-                best = cost
+            if value < best - 1e-9:
+                best = value
                 tour[:] = trial
                 pos[:] = tpos
                 choice[:] = tchoice
                 wins += 1
-    active[:] = True
-    best = _polish(tour, pos, data, choice, active)
     return best, wins
 
 
@@ -638,7 +638,7 @@ def search(data: SparseLegs, *, seed: int, kicks: int, tour: np.ndarray | None =
         kicks: most kicked restarts after the first polish.
         tour, choice: a start (default: nearest neighbour from the target whose cheapest
             home leg is smallest).
-        chunk: kicks per kernel call; between calls ``should_stop()`` (True ends the
+        chunk: kicks between checks (at least N / 4): ``should_stop()`` (True ends the
             search) and ``on_chunk(kicks done, best time)`` are called.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
@@ -659,15 +659,21 @@ def search(data: SparseLegs, *, seed: int, kicks: int, tour: np.ndarray | None =
               else np.ascontiguousarray(choice, dtype=np.int64).copy())
     done = improved = 0
     cost, wins = _walk(tour, data, choice, rng, 0, KICK_WINDOW)
+    chunk = max(chunk, n // 4)  # a chunk's own cost is O(N): keep their number O(kicks / N)
     while done < kicks:
         if should_stop is not None and should_stop():
             break
         step = min(chunk, kicks - done)
-        cost, wins = _walk(tour, data, choice, rng, step, KICK_WINDOW)
+        cost, wins = _walk(tour, data, choice, rng, step, KICK_WINDOW, cost)
         done += step
         improved += wins
         if on_chunk is not None:
             on_chunk(done, float(cost))
+    if done:  # a last full polish (the kicks were judged locally)
+        pos = np.empty(n + 1, dtype=np.int64)
+        pos[tour[1:n + 1]] = np.arange(1, n + 1)
+        pos[n] = 0
+        cost = _polish(tour, pos, data, choice, np.ones(n, dtype=np.bool_))
     return SearchOutcome(tour, choice, float(cost), done, improved)
 
 
