@@ -276,8 +276,11 @@ def _two_opt(tour, pos, data, choice, active):
                     t4 = tour[j + 1] if direction == 0 else tour[j - 1]
                     if t4 == t1:
                         continue
-                    delta = d13 + _c(data, choice, t2, t4) - d12 - _c(data, choice, t3, t4)
-                    if delta < -1e-12:
+                    d34 = _c(data, choice, t3, t4)
+                    delta = d13 + _c(data, choice, t2, t4) - d12 - d34
+                    # a relative tolerance: with penalty legs (~1e5 s) a rounding error
+                    # would otherwise pass for a gain and the moves could cycle
+                    if delta < -1e-9 * (1.0 + d12 + d34):
                         if direction == 0:  # t1 t2 ... t3 t4 -> t1 t3 ... t2 t4
                             if i < j:
                                 _reverse(tour, pos, i + 1, j)
@@ -391,7 +394,7 @@ def _or_opt(tour, pos, data, choice, active):
                                       - base)
                                 best = min(a1, a2)
                                 rev = a2 < a1
-                            if best < remove - 1e-12:
+                            if best < remove - 1e-9 * (1.0 + remove + base):
                                 if length == 1:
                                     choice[u] = best_c
                                 _move_segment(tour, pos, i, length, jj, rev)
@@ -526,7 +529,7 @@ def _decode_window(tour, data, choice, i, j):
             total = x
             c_last = c
     saved = 0.0
-    if total < old - 1e-12:
+    if total < old - 1e-9 * (1.0 + old):  # relative: penalty legs are ~1e5 s
         saved = old - total
         c = c_last
         for k in range(span - 1, 0, -1):
@@ -593,7 +596,7 @@ def _walk(tour: np.ndarray, data: SparseLegs, choice: np.ndarray,
             g += _decode_window(trial, data, tchoice, lo - 1 - DECODE_MARGIN,
                                 lo + w + DECODE_MARGIN)
             value -= g
-            if g <= 1e-12:
+            if g <= 1e-9 * (1.0 + value):
                 break
         active[:] = False
         if value < current - 1e-9 or value < best * (1.0 + WALK_SLACK * rng.random()):
