@@ -189,6 +189,28 @@ def _inv(t: np.ndarray) -> np.ndarray:
     return out
 
 
+def _dh_batch(theta: np.ndarray, d: float, a: float, alpha: float) -> np.ndarray:
+    """:func:`_dh` of every angle in ``theta`` (P,): (P, 4, 4)."""
+    ct, st = np.cos(theta), np.sin(theta)
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    out = np.zeros((theta.shape[0], 4, 4))
+    out[:, 0, 0], out[:, 0, 1], out[:, 0, 2], out[:, 0, 3] = ct, -st * ca, st * sa, a * ct
+    out[:, 1, 0], out[:, 1, 1], out[:, 1, 2], out[:, 1, 3] = st, ct * ca, -ct * sa, a * st
+    out[:, 2, 1], out[:, 2, 2], out[:, 2, 3] = sa, ca, d
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def _inv_batch(t: np.ndarray) -> np.ndarray:
+    """:func:`_inv` of every rigid transform in ``t`` (P, 4, 4)."""
+    out = np.zeros_like(t)
+    rt = np.transpose(t[:, :3, :3], (0, 2, 1))
+    out[:, :3, :3] = rt
+    out[:, :3, 3] = -(rt @ t[:, :3, 3, None])[:, :, 0]
+    out[:, 3, 3] = 1.0
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class URKinematics:
     """The UR Denavit-Hartenberg parameters of an arm and its base/tool transforms.
@@ -216,6 +238,53 @@ class URKinematics:
         for i in range(6):
             t = t @ _dh(float(q[i]), d[i], a[i], _UR_ALPHA[i])
         return t @ self.flange_to_tool
+
+    def solve_batch(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`solve` for poses (P, 4, 4) at once: (P, 8, 6) angles in (-pi, pi] and a
+        (P, 8) mask of the candidates that exist (the same branches, in the same order).
+
+        Candidate ``b = 4 s + 2 w + e`` (shoulder s, wrist w, elbow e) as :meth:`solve`
+        lists them; a branch whose step has no real root is masked out.
+        """
+        n_pose = poses.shape[0]
+        d1, a2, a3, d4, d5, d6 = self.d1, self.a2, self.a3, self.d4, self.d5, self.d6
+        t06 = _inv(self.base) @ poses @ _inv(self.flange_to_tool)
+        p06 = t06[:, :3, 3]
+        p05 = p06 - d6 * t06[:, :3, 2]
+        radius = np.hypot(p05[:, 0], p05[:, 1])
+        reach = (radius >= abs(d4)) & (radius > 0.0)
+        safe = np.where(reach, radius, 1.0)
+        psi = np.arctan2(p05[:, 1], p05[:, 0])
+        phi = np.arcsin(np.clip(d4 / safe, -1.0, 1.0))
+        sol = np.zeros((n_pose, 8, 6))
+        valid = np.zeros((n_pose, 8), dtype=bool)
+        for s, th1 in enumerate((psi + phi, psi + math.pi - phi)):
+            z1 = np.stack([np.sin(th1), -np.cos(th1), np.zeros(n_pose)], axis=1)
+            c5 = (np.einsum("pi,pi->p", p06, z1) - d4) / d6
+            ok5 = reach & (np.abs(c5) <= 1.0 + 1e-12)
+            c5 = np.clip(c5, -1.0, 1.0)
+            a1_inv = _inv_batch(_dh_batch(th1, d1, 0.0, _UR_ALPHA[0]))
+            for w, th5 in enumerate((np.arccos(c5), -np.arccos(c5))):
+                s5 = np.sin(th5)
+                v = np.einsum("pji,pj->pi", t06[:, :3, :3], z1)
+                small = np.abs(s5) < 1e-12
+                s5_safe = np.where(small, 1.0, s5)
+                th6 = np.where(small, 0.0, np.arctan2(-v[:, 1] / s5_safe, v[:, 0] / s5_safe))
+                a5_inv = _inv_batch(_dh_batch(th5, d5, 0.0, _UR_ALPHA[4]))
+                a6_inv = _inv_batch(_dh_batch(th6, d6, 0.0, _UR_ALPHA[5]))
+                t14 = a1_inv @ t06 @ a6_inv @ a5_inv
+                px, py = t14[:, 0, 3], t14[:, 1, 3]
+                c3 = (px * px + py * py - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
+                ok3 = ok5 & (np.abs(c3) <= 1.0 + 1e-12)
+                c3 = np.clip(c3, -1.0, 1.0)
+                for e, th3 in enumerate((np.arccos(c3), -np.arccos(c3))):
+                    s3 = np.sin(th3)
+                    th2 = np.arctan2(py, px) - np.arctan2(a3 * s3, a2 + a3 * c3)
+                    th4 = np.arctan2(t14[:, 1, 0], t14[:, 0, 0]) - th2 - th3
+                    b = 4 * s + 2 * w + e
+                    sol[:, b] = np.stack([th1, th2, th3, th4, th5, th6], axis=1)
+                    valid[:, b] = ok3
+        return (sol + math.pi) % TWO_PI - math.pi, valid
 
     def solve(self, pose: np.ndarray) -> np.ndarray:
         """All (<= 8) closed-form solutions for a 4x4 tool pose, angles in (-pi, pi]."""
@@ -898,19 +967,20 @@ class IKSolver:
                            + (owner,))
         return np.clip(rows[order], lim.lower, lim.upper), owner[order]
 
-    def _spherical_canonical(self, poses: np.ndarray) -> list[np.ndarray]:
+    def _closed_form_canonical(self, poses: np.ndarray) -> list[np.ndarray]:
         """Canonical distinct accepted solutions of each pose (P, 4, 4), closed form batched.
 
-        Candidates of the spherical-wrist closed form are shifted into the limits,
+        Candidates of the closed form (UR or spherical wrist) are shifted into the limits,
         de-duplicated, and accepted by the chain's FK (a copy of Pinocchio's); a
         candidate that misses by more than ``accept_tol`` is polished by Newton steps
         on Pinocchio's FK as in :meth:`solve_canonical`, dropped if it still misses.
         """
         import pinocchio as pin
 
-        assert self.spherical is not None
+        kinematics = self.ur if self.ur is not None else self.spherical
+        assert kinematics is not None
         n_pose, nq = poses.shape[0], self.arm.nq
-        sol, valid = self.spherical.solve_batch(poses)
+        sol, valid = kinematics.solve_batch(poses)
         flat, inside = self._canonical_batch(sol.reshape(-1, nq))
         sol = flat.reshape(n_pose, 8, nq)
         valid &= inside.reshape(n_pose, 8)
@@ -964,7 +1034,7 @@ class IKSolver:
             raise ParameterError("pose must be finite")
         _check_seed(seed)
         if self.spherical is not None:
-            return self._spherical_canonical(pose4[None])[0]
+            return self._closed_form_canonical(pose4[None])[0]
         rng = np.random.default_rng(seed)
         target = pin.SE3(pose4)
         candidates = []
@@ -1000,7 +1070,7 @@ class IKSolver:
             raise ParameterError(f"targets must be PoseTargets, got {type(targets).__name__}")
         if seed is not None:
             require_int("IKSolver", "seed", seed, 0)
-        if self.spherical is not None:
+        if self.ur is not None or self.spherical is not None:
             return self._solve_targets_batched(targets)
         configurations, indices = [], []
         for i, block in enumerate(targets.poses):
@@ -1017,14 +1087,15 @@ class IKSolver:
                                method=self.method)
 
     def _solve_targets_batched(self, targets: PoseTargets) -> TargetSolutions:
-        """:meth:`solve_targets` for a spherical-wrist arm: every candidate pose at once."""
+        """:meth:`solve_targets` for an arm with a closed form (UR or spherical wrist): every
+        candidate pose of every target in one numpy batch, no per-target Python loop."""
         nq = self.arm.nq
         blocks = [np.asarray(block, dtype=np.float64) for block in targets.poses]
         sizes = [b.shape[0] for b in blocks]
         poses = np.concatenate(blocks) if sum(sizes) else np.zeros((0, 4, 4))
         if not np.all(np.isfinite(poses)):
             raise ParameterError("pose must be finite")
-        canon = self._spherical_canonical(poses)
+        canon = self._closed_form_canonical(poses)
         counts = np.array([c.shape[0] for c in canon], dtype=np.int64)
         stacked = np.concatenate(canon) if counts.sum() else np.zeros((0, nq))
         pose_of = np.repeat(np.arange(len(canon)), counts)

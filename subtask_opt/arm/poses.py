@@ -43,9 +43,6 @@ MAX_FILE_BYTES = 32 * 1024 * 1024
 _MIN_NORM = 1e-9
 MIN_AXIS_STEP = 5.0
 """The finest ``axis_step`` (degrees): at most 72 poses per tool-axis target."""
-MAX_POSES = 2_500
-"""The most tool poses of a target set (targets x 360 / axis_step for tool-axis targets):
-with up to 8 IK configurations each, at most 20,000 configurations, the solver's limit."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -182,14 +179,6 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
     if arr.shape[0] == 0:
         raise InputDataError("no targets given")
     _refuse_duplicates(arr, labels or [f"row {i}" for i in range(arr.shape[0])])
-    # the work (IK, then legs between every two configurations) grows with the square of
-    # the poses: bounded here, before any of it starts
-    poses_in_all = arr.shape[0] * (len(axis_samples(axis_step)) if arr.shape[1] == 6 else 1)
-    if poses_in_all > MAX_POSES:
-        raise ParameterError(f"{arr.shape[0]} targets with an axis step of {axis_step:g} "
-                             f"degrees make {poses_in_all} tool poses, more than {MAX_POSES} "
-                             f"(up to 8 IK configurations each): use a coarser axis step or "
-                             "fewer targets")
     labels = labels or [f"row {i}" for i in range(arr.shape[0])]
     poses, axes, free = [], [], []
     for i, row in enumerate(arr):

@@ -32,6 +32,7 @@ round-off.
 
 from __future__ import annotations
 
+import contextvars
 import math
 import threading
 import time
@@ -73,8 +74,41 @@ if TYPE_CHECKING:
     from subtask_opt.arm.serial import SerialArm
     from subtask_opt.tour.solve import SolverParams
 
-MAX_CONFIGURATIONS = 20_000
-"""Most configurations (over all targets) a problem may hold: the leg matrix is M x M."""
+_PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("serial_build_progress",
+                                                                default=False)
+
+
+@contextmanager
+def build_progress(enabled: bool) -> Iterator[None]:
+    """Progress bars (on a terminal) for the phases of every :class:`SerialProblem` built
+    inside the block: IK, collision checks (per target), legs; the search's own bar is
+    ``solve(..., progress=True)``. The CLI wraps the problem's construction in it."""
+    token = _PROGRESS.set(bool(enabled))
+    try:
+        yield
+    finally:
+        _PROGRESS.reset(token)
+
+
+@contextmanager
+def _ticker(desc: str) -> Iterator[None]:
+    from subtask_opt.base.progress import elapsed_ticker
+
+    if not _PROGRESS.get():
+        yield
+        return
+    with elapsed_ticker(desc):
+        yield
+
+
+SPARSE_FROM = 20_000
+"""``legs_mode="auto"`` uses the candidate legs above this many configurations (or when
+the dense matrix would not fit in memory): up to it, the dense (M, M) matrix and the
+micro-GA are kept, so every problem the dense path solved before (it refused more than
+20,000 configurations) is solved as before (``benchmarks/scale.py --compare`` measures
+both on RoboTSP's subsets and small panels)."""
+LEGS_MODES = ("auto", "dense", "sparse")
+"""How :class:`SerialProblem` stores its legs (its ``legs_mode``)."""
 
 
 @contextmanager
@@ -121,6 +155,17 @@ class SerialProblem:
     A scene with a ``tool`` mounts it (:meth:`~subtask_opt.arm.scene.Tool.mount`): ``arm``
     becomes the given arm with its tool frame at the tool's TCP, which then reaches the
     targets (the given arm's own tool frame is not used).
+        legs_mode: ``"dense"`` the (M, M) leg matrix; ``"sparse"`` candidate legs only
+            (:mod:`subtask_opt.arm.sparse_legs`: dominated configurations dropped, at most
+            :data:`~subtask_opt.arm.sparse_legs.DEFAULT_CAP` + 1 per target, leg blocks
+            between candidate targets, memory linear in the targets); ``"auto"`` (default)
+            sparse above :data:`SPARSE_FROM` configurations.
+            The only size limit is memory: a problem whose legs would not fit in the
+            available memory is refused before any IK.
+
+    The lazy leg check (after a search) reads and marks legs through :meth:`leg_time` and
+    :meth:`mark_leg` (flat configuration indices, -1 the home), which work for dense and
+    sparse legs alike.
 
     Built on construction (read-only): ``configurations`` (per target, (K_i, n)),
     ``offsets``, ``flat`` (M, n), ``legs`` (M, M, symmetric), ``home_out``/``home_in``
@@ -130,7 +175,8 @@ class SerialProblem:
     numba's compilation apart) and the collision checker.
 
     Raises:
-        ParameterError: bad home shape, clearance, or too many configurations.
+        ParameterError: bad home shape, clearance or legs_mode, or legs that would not fit
+            in memory.
         InputDataError: home outside the limits or in collision; a target with no
             (collision-free) configuration, naming its row.
     """
@@ -145,6 +191,7 @@ class SerialProblem:
     ik_seed: int = 0
     detours: bool = True
     detour: DetourParams | None = None
+    legs_mode: str = "auto"
     configurations: tuple[np.ndarray, ...] = field(init=False, repr=False)
     offsets: np.ndarray = field(init=False, repr=False)
     flat: np.ndarray = field(init=False, repr=False)
@@ -157,6 +204,11 @@ class SerialProblem:
     checker: CollisionChecker | None = field(init=False, repr=False)
     cpu: dict[str, float] = field(init=False, repr=False)
     dropped_in_collision: int = field(init=False, repr=False)
+    # the candidate legs (legs_mode "sparse"; None: the dense matrix) and the bound's inputs
+    sparse: Any = field(init=False, repr=False, default=None)
+    bound_inputs: Any = field(init=False, repr=False, default=None)
+    dropped_dominated: int = field(init=False, repr=False, default=0)
+    dropped_by_cap: int = field(init=False, repr=False, default=0)
     # ``legs`` is a read-only view of this array; solve_serial_problem hands it to the kernels
     # without an M x M copy (a read-only array would be compiled for separately), blocks
     # the legs it finds in collision in place and restores them before it returns, under
@@ -218,16 +270,30 @@ class SerialProblem:
             cpu["collision"] += time.process_time() - t0
         object.__setattr__(self, "checker", checker)
 
-        with _phase(cpu, "ik"):
-            params = self.ik if self.ik is not None else IKParams(wrap_alternatives=False)
+        if self.legs_mode not in LEGS_MODES:
+            raise ParameterError(f"SerialProblem.legs_mode must be one of {LEGS_MODES}, got "
+                                 f"{self.legs_mode!r}")
+        params = self.ik if self.ik is not None else IKParams(wrap_alternatives=False)
+        mode = _legs_mode(self, params)
+        with _phase(cpu, "ik"), _ticker(f"IK of {len(self.targets)} targets"):
             solutions = IKSolver(arm, params).solve_targets(self.targets, seed=self.ik_seed)
-        configs = []
-        dropped = 0
         for i, q in enumerate(solutions.configurations):
-            point = np.round(self.targets.points[i], 6).tolist()
             if q.shape[0] == 0:
+                point = np.round(self.targets.points[i], 6).tolist()
                 raise InputDataError(f"target {i} (row {i + 1}, point {point}) has no IK "
                                      f"solution within the joint limits of {arm.name}")
+        if _decide(mode, int(solutions.counts.sum())) == "sparse":
+            _build_sparse(self, solutions, checker, cpu)
+            return
+        from subtask_opt.base.progress import progress_bar
+
+        configs = []
+        dropped = 0
+        bar = progress_bar(_PROGRESS.get() and checker is not None, total=len(self.targets),
+                           desc="collision checks", unit="target")
+        for i, q in enumerate(solutions.configurations):
+            point = np.round(self.targets.points[i], 6).tolist()
+            bar.update(1)
             if checker is not None:
                 t0 = time.process_time()
                 free = np.array([not checker.in_collision(c) for c in q], dtype=bool)
@@ -241,14 +307,11 @@ class SerialProblem:
             q = np.ascontiguousarray(q)
             q.setflags(write=False)
             configs.append(q)
+        bar.close()
         counts = np.array([q.shape[0] for q in configs], dtype=np.int64)
-        if counts.sum() > MAX_CONFIGURATIONS:
-            raise ParameterError(
-                f"{counts.sum()} configurations in all, more than {MAX_CONFIGURATIONS}: use a "
-                "coarser axis step or fewer targets")
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         flat = np.ascontiguousarray(np.vstack(configs))
-        with _phase(cpu, "matrix"):
+        with _phase(cpu, "matrix"), _ticker(f"legs between {flat.shape[0]} configurations"):
             memory = joint_leg_square(flat, self.limits)
             legs = memory.view()
             home_out = joint_leg_times(home, flat, self.limits)[0]
@@ -263,6 +326,48 @@ class SerialProblem:
             if isinstance(value, np.ndarray) and value is not memory and value is not cheapest:
                 value.setflags(write=False)
             object.__setattr__(self, name, value)
+
+    def leg_time(self, a: int, b: int) -> float:
+        """The planned time of the leg between flat configurations a and b (-1: the home),
+        as the search sees it (a leg marked by :meth:`mark_leg` has its marked time).
+        The interface of the lazy leg check, either legs_mode."""
+        if a < 0 and b < 0:
+            return 0.0
+        if a < 0 or b < 0:
+            return float(self.home_out[max(a, b)])
+        if self.sparse is None:
+            return float(self._legs_memory[a, b])
+        from subtask_opt.tour.sparse import leg
+
+        ta, tb = (int(np.searchsorted(self.offsets, x, side="right") - 1) for x in (a, b))
+        return float(leg(self.sparse, ta, a - self.offsets[ta], tb, b - self.offsets[tb]))
+
+    def mark_leg(self, a: int, b: int, value: float) -> float:
+        """Set the leg between flat configurations a and b (-1: the home) to ``value``
+        both ways (``self.penalty``: infeasible; a detour's time: corrected); returns its
+        previous time. A sparse problem adds the targets' block first when it has none.
+        Home legs and dense legs are written in place (solve_serial_problem restores the
+        dense ones it marks before it returns)."""
+        old = self.leg_time(a, b)
+        if a < 0 or b < 0:
+            self.home_out.setflags(write=True)
+            self.home_out[max(a, b)] = value
+            self.home_out.setflags(write=False)
+            if self.sparse is not None:
+                self.sparse.home[max(a, b)] = value
+            return old
+        if self.sparse is None:
+            self._legs_memory[a, b] = self._legs_memory[b, a] = value
+            return old
+        off = self.offsets
+        ta, tb = (int(np.searchsorted(off, x, side="right") - 1) for x in (a, b))
+        _add_pairs(self, [(ta, tb)])
+        sp = self.sparse
+        for u, cu, v, cv in ((ta, a - off[ta], tb, b - off[tb]), (tb, b - off[tb], ta,
+                                                                  a - off[ta])):
+            slot = int(np.flatnonzero(sp.nbr[u] == v)[0])
+            sp.legs[sp.start[u, slot] + cu * (off[v + 1] - off[v]) + cv] = value
+        return old
 
     @property
     def size(self) -> int:
@@ -279,6 +384,155 @@ def _self_checker(arm: SerialArm) -> CollisionChecker:
     from subtask_opt.arm.scene import CollisionChecker
 
     return CollisionChecker(arm)
+
+
+def _legs_mode(problem: SerialProblem, params: IKParams) -> str:
+    """The legs mode before any work, its memory checked against what is available: at
+    most 8 IK solutions per tool pose (the closed forms; times 2^n with the +-2 pi
+    alternatives) bound the configurations. "auto" stays undecided until the IK has
+    counted them (:func:`_decide`)."""
+    from subtask_opt.arm import sparse_legs as sl
+
+    targets = problem.targets
+    per_pose = 8 * (2 ** problem.arm.nq if params.wrap_alternatives else 1)
+    most = targets.n_candidates * per_pose
+    if problem.legs_mode == "dense":
+        sl.check_memory(_dense_bytes(most))
+    else:  # sparse, or auto (which goes sparse whenever the dense matrix would not fit)
+        sl.check_memory(sl.memory_estimate(most, len(targets)))
+    return problem.legs_mode
+
+
+def _dense_bytes(m: int) -> int:
+    """Bytes of the dense legs of m configurations: the (M, M) matrix and its copies of
+    block minima (about 1.5 matrices at the peak)."""
+    return int(12 * m * m)
+
+
+def _decide(mode: str, m: int) -> str:
+    """"auto": dense up to :data:`SPARSE_FROM` configurations
+    when the matrix fits in the available memory, sparse otherwise."""
+    from subtask_opt.arm import sparse_legs as sl
+
+    if mode != "auto":
+        return mode
+    free = sl.available_memory()
+    if m > SPARSE_FROM or (free is not None and _dense_bytes(m) > free):
+        return "sparse"
+    return "dense"
+
+
+def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
+                  cpu: dict[str, float]) -> None:
+    """The candidate legs of :mod:`subtask_opt.arm.sparse_legs` into ``problem``: dominated
+    configurations dropped (exact), each target's best :data:`DEFAULT_CAP` kept (+ the
+    one nearest the home), those checked for collisions (a target whose kept ones all
+    collide checks the rest), leg blocks between candidate targets, the bound's inputs
+    over every configuration not dominated."""
+    from subtask_opt.arm import sparse_legs as sl
+
+    lim = problem.limits
+    home = problem.home
+    raw = [np.asarray(q) for q in solutions.configurations]
+    counts = np.array([q.shape[0] for q in raw], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    flat = np.ascontiguousarray(np.vstack(raw))
+    points = np.array([p[0, :3, 3] for p in problem.targets.poses])
+    with _phase(cpu, "matrix"), _ticker("configurations: dominance, cap, bound legs"):
+        rev = problem.arm.revolute
+        canon = np.where(rev, np.mod(flat + math.pi, 2 * math.pi), flat).round(6)
+        _, group = np.unique(canon, axis=0, return_inverse=True)
+        drop = sl.dominated(flat, offsets, group.astype(np.int64).ravel(), home)
+        keep = ~drop
+        home_all = joint_leg_times(home, flat, lim)[0]
+        f1, o1, h1 = _subset(flat, offsets, keep, home_all)
+        bound = sl.bound_inputs(f1, o1, points, h1, lim, sl.reach_levers(problem.arm),
+                                k_bound=BOUND_NEIGHBOURS)
+        cap_keep = sl.keep_best(f1, o1, points, h1, lim, sl.DEFAULT_CAP)
+    dropped = 0
+    if checker is not None:
+        from subtask_opt.base.progress import progress_bar
+
+        t0 = time.process_time()
+        free = np.zeros(f1.shape[0], dtype=bool)
+        bar = progress_bar(_PROGRESS.get(), total=o1.shape[0] - 1, desc="collision checks",
+                           unit="target")
+        for t in range(o1.shape[0] - 1):
+            bar.update(1)
+            rows = np.arange(o1[t], o1[t + 1])
+            first = rows[cap_keep[rows]]
+            free[first] = [not checker.in_collision(q) for q in f1[first]]
+            if not free[first].any():  # the cap's choice all collides: try the rest
+                rest = rows[~cap_keep[rows]]
+                free[rest] = [not checker.in_collision(q) for q in f1[rest]]
+                cap_keep[rest] = True
+                if not free[rows].any():
+                    point = np.round(problem.targets.points[t], 6).tolist()
+                    raise InputDataError(f"target {t} (row {t + 1}, point {point}) has no "
+                                         f"collision-free configuration (all {rows.size} "
+                                         "IK solutions collide)")
+            dropped += int((cap_keep[rows] & ~free[rows]).sum())
+        bar.close()
+        cap_keep &= free
+        cpu["collision"] += time.process_time() - t0
+    f2, o2, h2 = _subset(f1, o1, cap_keep, h1)
+    with _phase(cpu, "matrix"), _ticker(f"candidate legs of {o2.shape[0] - 1} targets"):
+        penalty = _sparse_penalty(f2, o2, h2, lim)
+        data = sl.build_sparse(f2, o2, points, h2, lim, penalty=penalty)
+    configs = tuple(np.ascontiguousarray(f2[o2[t]:o2[t + 1]]) for t in range(o2.shape[0] - 1))
+    for q in configs:
+        q.setflags(write=False)
+    f2.setflags(write=False)
+    h2 = h2.copy()
+    h2.setflags(write=False)
+    empty = np.zeros((0, 0))
+    for name, value in (("configurations", configs), ("offsets", o2), ("flat", f2),
+                        ("legs", empty), ("dist", empty), ("penalty", penalty),
+                        ("home_out", h2), ("home_in", h2), ("cpu", cpu),
+                        ("_cheapest", empty), ("dropped_in_collision", dropped),
+                        ("_legs_memory", empty), ("sparse", data), ("bound_inputs", bound),
+                        ("dropped_dominated", int(drop.sum())),
+                        ("dropped_by_cap", int(f1.shape[0] - cap_keep.sum() - dropped))):
+        object.__setattr__(problem, name, value)
+
+
+def _subset(flat: np.ndarray, offsets: np.ndarray, keep: np.ndarray,
+            home: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The configurations with ``keep``, their offsets and home legs."""
+    counts = np.add.reduceat(keep.astype(np.int64), offsets[:-1])
+    return (np.ascontiguousarray(flat[keep]),
+            np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+            np.ascontiguousarray(home[keep]))
+
+
+def _sparse_penalty(flat: np.ndarray, offsets: np.ndarray, home: np.ndarray,
+                    limits: JointLimits) -> float:
+    """A leg time longer than any tour of possible legs: targets + 2 times the longest
+    possible leg (every joint across its whole range of the configurations)."""
+    span = np.vstack([flat.max(axis=0), flat.min(axis=0)])
+    top = float(joint_leg_times(span[0], span[1], limits)[0, 0])
+    return (offsets.shape[0] + 2) * max(top, float(home.max())) + 1.0
+
+
+def _add_pairs(problem: SerialProblem, pairs: list[tuple[int, int]]) -> None:
+    """Add the leg blocks of target ``pairs`` to a sparse problem (the legs a search
+    asked for), keeping the legs already marked."""
+    from subtask_opt.arm import sparse_legs as sl
+
+    sp = problem.sparse
+    new = [(a, b) for a, b in pairs if a != b and not np.any(sp.nbr[a] == b)]
+    if not new:
+        return
+    old = {(a, int(b)): s for a in range(sp.size) for s, b in enumerate(sp.nbr[a]) if b >= 0}
+    data = sl.build_sparse(problem.flat, problem.offsets, sp.coords, sp.home, problem.limits,
+                           extra=list(old) + new, k_task=0, k_joint=0, penalty=sp.penalty)
+    counts = np.diff(problem.offsets)
+    for (a, b), s in old.items():  # carry the marked legs over
+        size = int(counts[a] * counts[b])
+        t = int(np.flatnonzero(data.nbr[a] == b)[0])
+        data.legs[data.start[a, t]:data.start[a, t] + size] = sp.legs[sp.start[a, s]:
+                                                                      sp.start[a, s] + size]
+    object.__setattr__(problem, "sparse", data)
 
 
 @dataclass(frozen=True, eq=False)
@@ -464,6 +718,14 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
     the generalised-TSP branch and cut over every configuration (small problems), or
     says why not.
 
+    A problem on candidate legs (``problem.sparse``, legs_mode "sparse") is searched by
+    :func:`subtask_opt.tour.sparse.search` instead (an iterated local search: every kick
+    counts as one generation for ``stop``; default: :data:`SPARSE_STALL` kicks without
+    improvement or :data:`SPARSE_KICKS_PER_TARGET` kicks per target), with the same lazy
+    leg check through :meth:`SerialProblem.mark_leg`; its bound is
+    :func:`subtask_opt.tour.sparse.one_tree_bound`. Closed tours only; ``certify``,
+    ``kicks`` and the micro-GA's ``params`` do not apply there and are refused.
+
     Args:
         kicks: kicks of the iterated local search per child and restart individual
             (:func:`subtask_opt.tour.permutation.make_aux`); None: its default for N targets.
@@ -491,6 +753,20 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
     if kicks is not None:
         require_int("solve_serial_problem", "kicks", kicks, 0, MAX_KICKS)
     require_in_range("solve", "certify_time_limit", certify_time_limit, 1e-3, 86_400.0)
+    if problem.sparse is not None:
+        if kicks is not None:
+            raise ParameterError("kicks applies to the micro-GA of dense legs; a problem on "
+                                 "candidate legs (legs_mode 'sparse') has its own kicked search")
+        changed = [f for f in ("preset", "population", "convergence_tol", "grasp_share",
+                               "max_segment", "neighbours", "paper_loop", "runs", "bound_max_nodes")
+                   if getattr(params, f) != getattr(SolverParams(), f)]
+        if changed:
+            raise ParameterError(f"SolverParams.{changed[0]} applies to the micro-GA of dense "
+                                 "legs, not to a problem on candidate legs (legs_mode "
+                                 "'sparse')")
+        with problem._lock:
+            return _solve_sparse(problem, int(seed), stop, params, constraints, progress,
+                                 certify)
     shape = _serial_shape(problem, constraints)
     with problem._lock:
         blocked: dict[tuple[int, int], float] = {}  # leg (a, b), a < b -> its time
@@ -501,6 +777,166 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
             memory = problem._legs_memory
             for (a, b), value in blocked.items():
                 memory[a, b] = memory[b, a] = value
+
+
+BOUND_NEIGHBOURS = 120
+"""Nearest pairs (task space) per target whose cheapest leg the sparse bound computes
+exactly (60 left a 2,000-hole panel's bound 9% lower: the closed-form bound of the
+other pairs is then below the tour's typical leg)."""
+SPARSE_STALL = 5000
+"""Kicks without a shorter tour after which the sparse search stops (its default stop,
+with :data:`SPARSE_KICKS_PER_TARGET` kicks per target in all)."""
+SPARSE_KICKS_PER_TARGET = 20
+SPARSE_REPAIR_KICKS = 2000
+"""Most kicks of a search round after legs were found in collision, every
+:data:`SPARSE_REPAIR_EVERY`-th such round (the others only polish: a round per handful of
+legs in collision would otherwise cost kicks each); the first round has the whole
+budget; ``stop`` applies to each round, a time limit to all of them."""
+SPARSE_REPAIR_EVERY = 10
+
+
+def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
+                  constraints: TourConstraints | None, progress: bool,
+                  certify: bool) -> Result:
+    """:func:`solve_serial_problem` on candidate legs (:mod:`subtask_opt.tour.sparse`): the
+    iterated local search (each kick counts as a generation for ``stop``), the lazy leg
+    check (a leg in collision is marked with the penalty by :meth:`SerialProblem.mark_leg`
+    and the search resumes from the same tour), legs between targets that are not
+    candidates added when an answer uses one, and the sparse 1-tree bound."""
+    from subtask_opt.base.progress import progress_bar
+    from subtask_opt.base.results import History
+    from subtask_opt.base.stop import MaxGenerations, NoImprovement, Progress
+    from subtask_opt.tour import sparse as ts
+    from subtask_opt.tour.constraints import checked
+
+    cons = checked(constraints)
+    if cons.home is not None or cons.start is not None or cons.end is not None or (
+            cons.precedence or cons.tour != "closed"):
+        raise ParameterError("a problem on candidate legs (legs_mode 'sparse', more than "
+                             "SPARSE_FROM configurations) takes closed tours without a first "
+                             "or last target or precedence; use legs_mode='dense' or fewer "
+                             "configurations")
+    if certify:
+        raise ParameterError("certify: the branch and cut needs the dense leg matrix; use "
+                             "legs_mode='dense' (small problems)")
+    n = problem.size
+    cpu = dict(problem.cpu)
+    cpu["search"] = 0.0
+    cpu["bound"] = 0.0
+    kicks = SPARSE_KICKS_PER_TARGET * n + 1000
+    criteria = as_criteria(stop, [NoImprovement(SPARSE_STALL), MaxGenerations(kicks)])
+    for c in criteria:
+        if isinstance(c, MaxGenerations):
+            kicks = c.generations
+    started = time.monotonic()
+    # per search round: its first kick, best time and the kick that found it (a repair
+    # round starts afresh: its tour holds legs just blocked, so it is longer than before)
+    state: dict[str, Any] = {"best": math.inf, "at": 0, "done": 0, "start": 0}
+
+    def should_stop() -> bool:
+        p = Progress(int(state["done"] - state["start"]), float(state["best"]),
+                     int(state["done"] - state["at"]),
+                     time.monotonic() - started)
+        return any(c(p) for c in criteria)
+
+    history_gen: list[int] = []
+    history_cost: list[float] = []
+    checked_legs: dict[tuple[int, int], bool] = {}
+    tour = choice = None
+    done_total = rounds = 0
+    t0 = time.process_time()
+    with _compile_apart(cpu) as compiled, progress_bar(progress, total=kicks,
+                                                       desc="search (kicks)",
+                                                       unit="kick") as bar:
+        while True:
+            rounds += 1
+            state.update(best=math.inf, at=done_total, start=done_total)
+            # after legs were found in collision: polish only (re-decode around the blocked
+            # legs), with kicks every SPARSE_REPAIR_EVERY rounds
+            budget = kicks if rounds == 1 else (
+                min(kicks, SPARSE_REPAIR_KICKS) if rounds % SPARSE_REPAIR_EVERY == 0 else 0)
+
+            def on_chunk(done: int, best: float, base: int = done_total) -> None:
+                if best < state["best"] - 1e-12:
+                    state["best"], state["at"] = best, base + done
+                    history_gen.append(base + done)
+                    history_cost.append(best)
+                bar.update(base + done - state["done"])
+                state["done"] = base + done
+                bar.set_postfix_str(f"best {best:.4f}")
+
+            out = ts.search(problem.sparse, seed=seed + rounds - 1,
+                            kicks=budget, tour=tour, choice=choice,
+                            should_stop=should_stop, on_chunk=on_chunk)
+            done_total += out.kicks
+            tour, choice = out.tour, out.choice
+            flat_tour = [-1 if t == n else int(problem.offsets[t] + choice[t]) for t in tour]
+            missing = [(int(a), int(b)) for a, b in zip(tour[1:-2], tour[2:-1], strict=True)
+                       if not np.any(problem.sparse.nbr[a] == b)]
+            if missing:  # the legs the search asked for: add them and search on
+                _add_pairs(problem, missing)
+                continue
+            repair = False
+            if problem.checker is not None:
+                tc = time.process_time()
+                for a, b in zip(flat_tour[:-1], flat_tour[1:], strict=True):
+                    key = (min(a, b), max(a, b))
+                    if key not in checked_legs:
+                        qa = problem.home if a < 0 else problem.flat[a]
+                        qb = problem.home if b < 0 else problem.flat[b]
+                        checked_legs[key] = problem.checker.leg_in_collision(
+                            qa, qb, problem.clearance)
+                        if checked_legs[key]:
+                            problem.mark_leg(a, b, problem.penalty)
+                            repair = True
+                cpu["collision"] += time.process_time() - tc
+            if not repair:
+                break
+            if rounds >= MAX_ROUNDS:
+                raise NoPathError(f"legs in collision still in the best tour after {rounds} "
+                                  "searches")
+    t1 = time.process_time()
+    cpu["search"] += t1 - t0 - compiled[0]
+    if out.cost >= problem.penalty:
+        raise NoPathError(f"no tour avoids the legs in collision ({sum(checked_legs.values())} "
+                          f"legs of {len(checked_legs)} checked collide)")
+    order = tour[1:-1].astype(np.int64)
+    index = choice.astype(np.int64)
+    with _compile_apart(cpu) as compiled:
+        tb = time.process_time()
+        edges, weights, rho, home_min = problem.bound_inputs
+        bound = ts.one_tree_bound(n, edges, weights, rho, home_min, upper=out.cost)
+        cpu["bound"] += time.process_time() - tb
+    cpu["bound"] -= compiled[0]
+    chosen, _path, planned, executed = _tour_legs(problem, order, index, False)
+    counts = {
+        "targets": n,
+        "configurations_per_target": [int(k) for k in problem.counts],
+        "configurations": int(problem.offsets[-1]),
+        "dropped_in_collision": problem.dropped_in_collision,
+        "dropped_dominated": problem.dropped_dominated,
+        "dropped_by_cap": problem.dropped_by_cap,
+        "candidate_legs": int(problem.sparse.legs.size),
+        "legs_checked": len(checked_legs),
+        "legs_infeasible": int(sum(checked_legs.values())),
+        "legs_detoured": 0,
+        "search_rounds": rounds,
+        "ga_rounds": 0,
+        "kicks": done_total,
+    }
+    report = SerialReport(order=order, configuration_index=index, configurations=chosen,
+                          home=np.array(problem.home), leg_times=executed,
+                          planned_leg_times=planned, total_time=float(executed.sum()),
+                          collision_checked=problem.checker is not None, counts=counts,
+                          cpu=cpu, generations=done_total, restarts=0, seed=seed,
+                          open_path=False, problem=problem)
+    best = np.array(history_cost) if history_cost else np.array([out.cost])
+    history = History(float(best[0]), best, best.copy())
+    return Result(order=order, total_time=float(executed.sum()), leg_times=executed,
+                  matrix=np.zeros((0, 0)), generations=done_total, restarts=0,
+                  runtime_s=time.monotonic() - started, seed=seed, history=history,
+                  preset=params.preset, lower_bound=bound, certified=None, report=report,
+                  constraints=cons, start=None, runs=1, configurations=chosen, cpu=cpu)
 
 
 @dataclass(frozen=True)
@@ -947,5 +1383,5 @@ def default_home(arm: SerialArm) -> np.ndarray | None:
     return np.radians(np.asarray(home, dtype=np.float64))
 
 
-__all__ = ["MAX_CONFIGURATIONS", "SerialProblem", "SerialReport", "default_home",
-           "evaluate_tour", "solve_serial_problem"]
+__all__ = ["LEGS_MODES", "SPARSE_FROM", "SerialProblem", "SerialReport", "build_progress",
+           "default_home", "evaluate_tour", "solve_serial_problem"]

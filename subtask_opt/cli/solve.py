@@ -190,8 +190,11 @@ def run(args: argparse.Namespace) -> int:
     constraints = _constraints(args, robot.planar)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
-        problem = ArmProblem(_targets(args, robot), robot, home=_home(args, robot),
-                             **_problem_options(args, robot.planar))
+        from subtask_opt.arm.serial_problem import build_progress
+
+        with build_progress(not args.no_progress):
+            problem = ArmProblem(_targets(args, robot), robot, home=_home(args, robot),
+                                 **_problem_options(args, robot.planar))
     for w in caught:
         print(f"warning: {w.message}", file=sys.stderr)
     if args.precedence:  # its indices against the subtasks, the file's line named

@@ -337,3 +337,29 @@ def test_bad_seeds_are_refused(seed):
     pose = _arm("vs060_drill").fk(np.zeros(6))
     with pytest.raises(ParameterError, match="seed"):
         solver.solve(pose, seed=seed)
+
+
+@pytest.mark.parametrize("wrap", [False, True])
+def test_ur_targets_batched_equal_the_per_pose_solutions(wrap):
+    """solve_targets solves every pose of a UR arm in one numpy batch: the same set of
+    solutions per target as solve() pose by pose (the per-pose closed form is the oracle),
+    each reaching its pose by Pinocchio's FK."""
+    arm = load_serial_arm("ur5")
+    rng = np.random.default_rng(3)
+    qs = rng.uniform(-math.pi, math.pi, (12, 6))
+    rows = []
+    for q in qs:
+        pose = arm.fk(q)
+        rows.append([*pose[:3, 3], *pose[:3, 2]])
+    targets = make_targets(np.array(rows), axis_step=90.0)
+    solver = IKSolver(arm, IKParams(wrap_alternatives=wrap))
+    batched = solver.solve_targets(targets)
+    for i, block in enumerate(targets.poses):
+        got = batched.configurations[i]
+        ref = np.vstack([solver.solve(pose) for pose in block])
+        assert got.shape == ref.shape
+        key = lambda a: a[np.lexsort(a.round(7).T[::-1])]  # noqa: E731
+        np.testing.assert_allclose(key(got), key(ref), atol=1e-7)
+        for q, j in zip(got, batched.pose_index[i], strict=True):
+            dp, dr = solver.pose_error(q, block[j])
+            assert dp < 1e-9 and dr < 1e-9

@@ -127,3 +127,20 @@ def test_shipped_panel_example_with_figure_and_view(tmp_path: Path, capsys) -> N
 @pytest.mark.parametrize("flag,value", [("--view", "out.htm"), ("--animate", "out.gif")])
 def test_serial_output_flags_refused_in_one_line(files, capsys, flag, value) -> None:
     _bad(files, capsys, _base(files) + [flag, str(files["dir"] / value)], flag.lstrip("-"))
+
+
+def test_legs_that_do_not_fit_in_memory_are_refused_before_any_ik(files, capsys,
+                                                                 monkeypatch) -> None:
+    """The one size limit is memory, checked before the IK starts: one line, exit 2."""
+    from subtask_opt.arm import ik, sparse_legs
+
+    monkeypatch.setattr(sparse_legs, "available_memory", lambda: 1000)
+
+    def no_ik(*args, **kwargs):
+        raise AssertionError("the IK ran before the memory check")
+
+    monkeypatch.setattr(ik.IKSolver, "solve_targets", no_ik)
+    code = main(_base(files) + ["--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "GiB" in err[0] and "memory available" in err[0]
