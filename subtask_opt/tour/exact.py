@@ -943,6 +943,24 @@ class _GtspModel:
         return chosen[order]
 
 
+def _node_clusters(name: str, cost: Any, clusters: Any) -> tuple[np.ndarray, np.ndarray, int]:
+    """(cost matrix, cluster of every node, number of clusters) checked for ``name``: a
+    square matrix of at least 3 x 3 (inf: forbidden), clusters numbered 0..n-1, n >= 3."""
+    c = np.asarray(cost, dtype=float)
+    if c.ndim != 2 or c.shape[0] != c.shape[1] or c.shape[0] < 3 or np.isnan(c).any():
+        raise ParameterError(f"{name} needs a square cost matrix of at least 3 x 3 "
+                             f"(inf: forbidden), got shape {c.shape}")
+    cl = np.asarray(clusters)
+    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
+        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
+                             f"got shape {cl.shape} of {cl.dtype}")
+    n = int(cl.max()) + 1
+    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
+        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
+                             f"got {sorted(set(cl.tolist()))}")
+    return c, cl, n
+
+
 def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
                   incumbent: np.ndarray | Sequence[int] | None = None,
                   time_limit: float | None = None,
@@ -959,18 +977,7 @@ def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
     Returns ``(cost, order, nodes)`` as :func:`gtsp_optimum`. Raises
     :class:`SubtaskOptError` if no tour exists or none is proven within ``time_limit``.
     """
-    c = np.asarray(cost, dtype=float)
-    if c.ndim != 2 or c.shape[0] != c.shape[1] or c.shape[0] < 3 or np.isnan(c).any():
-        raise ParameterError(f"agtsp_optimum needs a square cost matrix of at least 3 x 3 "
-                             f"(inf: forbidden), got shape {c.shape}")
-    cl = np.asarray(clusters)
-    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
-        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
-                             f"got shape {cl.shape} of {cl.dtype}")
-    n = int(cl.max()) + 1
-    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
-        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
-                             f"got {sorted(set(cl.tolist()))}")
+    c, cl, n = _node_clusters("agtsp_optimum", cost, clusters)
     require_int("agtsp_optimum", "max_rounds", max_rounds, 1)
     if time_limit is not None and not (isinstance(time_limit, (int, float))
                                        and time_limit > 0):
@@ -1150,18 +1157,7 @@ def milp_pinned_clustered(cost: np.ndarray, clusters: np.ndarray | Sequence[int]
     node visited in each. Raises :class:`SubtaskOptError` if no tour keeps the rules or
     none is proven optimal within ``time_limit`` seconds.
     """
-    c = np.asarray(cost, dtype=float)
-    if c.ndim != 2 or c.shape[0] != c.shape[1] or c.shape[0] < 3 or np.isnan(c).any():
-        raise ParameterError(f"milp_pinned_clustered needs a square cost matrix of at least "
-                             f"3 x 3 (inf: forbidden), got shape {c.shape}")
-    cl = np.asarray(clusters)
-    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
-        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
-                             f"got shape {cl.shape} of {cl.dtype}")
-    n = int(cl.max()) + 1
-    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
-        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
-                             f"got {sorted(set(cl.tolist()))}")
+    c, cl, n = _node_clusters("milp_pinned_clustered", cost, clusters)
     p = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     if not 0 <= first < n or not -1 <= last < n or last == first:
         raise ParameterError(f"first={first} and last={last} must be distinct clusters in "
