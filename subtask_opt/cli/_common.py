@@ -275,6 +275,15 @@ def non_negative_int(text: str) -> int:
     return _whole_number(text, 0)
 
 
+def ascii_float(text: str) -> float:
+    """An argparse type: any number written in ASCII (its range is left to the parameter
+    class the option fills, which names the field)."""
+    try:
+        return float(ascii_number(text))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
 def positive_float(text: str) -> float:
     try:
         value = float(ascii_number(text))

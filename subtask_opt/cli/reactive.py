@@ -17,13 +17,12 @@ from subtask_opt.cli._common import (
     add_outputs,
     add_workers,
     animation_output,
+    ascii_float,
     ascii_number,
     failed,
-    float_in,
     output_file,
     point,
     point3,
-    positive_float,
     positive_int,
     refuse_overwriting_inputs,
     seed,
@@ -108,16 +107,15 @@ def register(plan: argparse._SubParsersAction, bench: argparse._SubParsersAction
 def _robot_options(p: argparse.ArgumentParser) -> None:
     """Robot, sonar and run-length options (bounds are checked by the parameter classes)."""
     g = p.add_argument_group("robot and sonar")
-    g.add_argument("--noise", type=float_in(0.0, 1e6), default=0.0, metavar="STD",
+    g.add_argument("--noise", type=ascii_float, default=0.0, metavar="STD",
                    help="standard deviation of the sonar noise, in [0, range] (default 0)")
-    g.add_argument("--range", dest="max_range", type=float_in(0.0, 1e6, open_low=True),
-                   default=None, metavar="R",
+    g.add_argument("--range", dest="max_range", type=ascii_float, default=None, metavar="R",
                    help="sonar range R_max in (0, 1e6] (default 2.5)")
-    g.add_argument("--max-speed", type=positive_float, default=None, metavar="V",
+    g.add_argument("--max-speed", type=ascii_float, default=None, metavar="V",
                    help="speed limit > 0, at most range / dt (default 0.3)")
-    g.add_argument("--max-turn-rate", type=positive_float, default=None, metavar="RAD_PER_S",
+    g.add_argument("--max-turn-rate", type=ascii_float, default=None, metavar="RAD_PER_S",
                    help="turn-rate limit in rad/s, in (0, pi / dt] (default 1.2)")
-    g.add_argument("--dt", type=positive_float, default=None, metavar="S",
+    g.add_argument("--dt", type=ascii_float, default=None, metavar="S",
                    help="sampling time in seconds > 0 (default 0.5)")
     g.add_argument("--max-steps", type=positive_int, default=None,
                    help="sampling periods before a timeout (default 1500; a run whose "
