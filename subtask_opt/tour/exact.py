@@ -699,14 +699,7 @@ def gtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
     c = _square_matrix(cost)
     if not np.allclose(c, c.T, rtol=1e-9, atol=1e-12):
         raise ParameterError("gtsp_optimum needs a symmetric cost matrix")
-    cl = np.asarray(clusters)
-    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
-        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
-                             f"got shape {cl.shape} of {cl.dtype}")
-    n = int(cl.max()) + 1
-    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
-        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
-                             f"got {sorted(set(cl.tolist()))}")
+    cl, n = _cluster_labels(clusters, c.shape[0])
     require_int("gtsp_optimum", "max_rounds", max_rounds, 1)
     if time_limit is not None and not (isinstance(time_limit, (int, float))
                                        and time_limit > 0):
@@ -736,14 +729,7 @@ def gtsp_lp_bound(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
     c = _square_matrix(cost)
     if not np.allclose(c, c.T, rtol=1e-9, atol=1e-12):
         raise ParameterError("gtsp_lp_bound needs a symmetric cost matrix")
-    cl = np.asarray(clusters)
-    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
-        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
-                             f"got shape {cl.shape} of {cl.dtype}")
-    n = int(cl.max()) + 1
-    if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
-        raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
-                             f"got {sorted(set(cl.tolist()))}")
+    cl, n = _cluster_labels(clusters, c.shape[0])
     deadline = None if time_limit is None else time.perf_counter() + float(time_limit)
     model = _GtspModel(c, cl.astype(np.int64))
     try:
@@ -950,15 +936,22 @@ def _node_clusters(name: str, cost: Any, clusters: Any) -> tuple[np.ndarray, np.
     if c.ndim != 2 or c.shape[0] != c.shape[1] or c.shape[0] < 3 or np.isnan(c).any():
         raise ParameterError(f"{name} needs a square cost matrix of at least 3 x 3 "
                              f"(inf: forbidden), got shape {c.shape}")
+    cl, n = _cluster_labels(clusters, c.shape[0])
+    return c, cl, n
+
+
+def _cluster_labels(clusters: Any, m: int) -> tuple[np.ndarray, int]:
+    """(the cluster of each of the ``m`` nodes, the number of clusters): integers
+    numbering every cluster 0..n-1, n >= 3."""
     cl = np.asarray(clusters)
-    if cl.shape != (c.shape[0],) or not np.issubdtype(cl.dtype, np.integer):
-        raise ParameterError(f"clusters must be {c.shape[0]} integers (one per node), "
+    if cl.shape != (m,) or not np.issubdtype(cl.dtype, np.integer):
+        raise ParameterError(f"clusters must be {m} integers (one per node), "
                              f"got shape {cl.shape} of {cl.dtype}")
     n = int(cl.max()) + 1
     if cl.min() < 0 or len(np.unique(cl)) != n or n < 3:
         raise ParameterError(f"clusters must number every cluster 0..n-1 (n >= 3), "
                              f"got {sorted(set(cl.tolist()))}")
-    return c, cl, n
+    return cl, n
 
 
 def agtsp_optimum(cost: np.ndarray, clusters: np.ndarray | Sequence[int], *,
