@@ -152,22 +152,50 @@ class _PackageCompiles(event.Listener):
 
 
 @contextmanager
+def _group_lock(group: str) -> Iterator[None]:
+    """Hold ``group``'s lock file in the cache folder (exclusive, across processes).
+
+    Two processes that start on a cold cache together (a batch's workers, a test run's)
+    would otherwise both compile the same kernels, each for a minute; with the lock the
+    second waits and then loads what the first saved. Where no lock can be taken (no
+    ``fcntl``, an unwritable folder) the block runs unlocked, as before."""
+    try:
+        import fcntl
+
+        handle = open(CACHE_DIR / f"{group}.lock", "a")  # noqa: SIM115 - held by the block
+    except (ImportError, OSError):
+        yield
+        return
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX)  # released by close, or by the process's end
+        yield
+    finally:
+        handle.close()
+
+
+@contextmanager
 def compiling(group: str, what: str) -> Iterator[None]:
     """Around the first call of a group of kernels (``what``: how to name them).
 
-    When ``group`` is not yet in the cache, numba's compilation is announced once
-    per process (if :class:`_PackageCompiles` has not already), and on a terminal
-    a ticking elapsed-time bar follows. The group is marked warm after.
+    When ``group`` is not yet in the cache, the block holds the group's lock
+    (:func:`_group_lock`: another process compiling the same group is waited for, and
+    its kernels are then loaded), numba's compilation is announced once per process (if
+    :class:`_PackageCompiles` has not already), and on a terminal a ticking elapsed-time
+    bar follows. The group is marked warm after.
     """
     if is_warm(group):
         yield
         return
-    from subtask_opt.base.progress import elapsed_ticker
+    with _group_lock(group):
+        if is_warm(group):  # compiled by the process that held the lock
+            yield
+            return
+        from subtask_opt.base.progress import elapsed_ticker
 
-    _announce(what)
-    with elapsed_ticker(f"compiling {what}"):
-        yield
-    mark_warm(group)
+        _announce(what)
+        with elapsed_ticker(f"compiling {what}"):
+            yield
+        mark_warm(group)
 
 
 class _LockCPU(event.Listener):

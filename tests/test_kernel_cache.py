@@ -209,3 +209,37 @@ def test_compile_seconds_counts_compilation_only() -> None:
     with _kernel_cache.compile_seconds() as again:
         assert twice(4) == 8  # already compiled
     assert again == [0.0]
+
+
+_WAITER = """
+import sys
+from pathlib import Path
+from subtask_opt import _kernel_cache
+_kernel_cache.CACHE_DIR = Path(sys.argv[1])
+(Path(sys.argv[1]) / "started").touch()
+with _kernel_cache.compiling("locked", "the locked kernels"):
+    (Path(sys.argv[1]) / "entered").touch()
+"""
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="fcntl locks")
+def test_a_second_process_waits_for_the_group_being_compiled_and_then_loads_it(
+        tmp_path, monkeypatch):
+    import time
+
+    monkeypatch.setattr(_kernel_cache, "CACHE_DIR", tmp_path)
+    env = dict(os.environ, PYTHONPATH=str(PROJECT_ROOT))
+    with _kernel_cache._group_lock("locked"):  # this process is "compiling" the group
+        child = subprocess.Popen([sys.executable, "-c", _WAITER, str(tmp_path)], env=env,
+                                 stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 120
+        while not (tmp_path / "started").exists() and child.poll() is None:
+            assert time.monotonic() < deadline, "the child never started"
+            time.sleep(0.05)
+        time.sleep(0.5)
+        assert not (tmp_path / "entered").exists()  # it waits while the group compiles
+        _kernel_cache.mark_warm("locked")
+    _, err = child.communicate(timeout=120)
+    assert child.returncode == 0, err
+    assert (tmp_path / "entered").exists()
+    assert "compiling" not in err  # it found the group warm: nothing announced

@@ -18,6 +18,7 @@ criteria between chunks, because numba cannot call Python objects.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import time
 from collections.abc import Callable
@@ -438,6 +439,15 @@ def compiled_entry(kernel: Any, args: tuple[Any, ...]) -> Any:
         return kernel
 
 
+def _types_key(kernel: Any, args: tuple[Any, ...]) -> str:
+    """A short name of the numba types of ``args`` ("" when the kernels run as Python)."""
+    try:
+        text = ",".join(str(kernel.typeof_pyval(a)) for a in args)
+    except AttributeError:
+        return ""
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
 def run_ga(
     kind: Kind,
     config: GAConfig,
@@ -486,7 +496,9 @@ def run_ga(
     code = tag(kind)  # its type selects the kind's compiled loop
     probe = (code, pop, lengths, costs, best, best_cost, counters, data, aux, params, rng, 0,
              stall_limit, target, np.empty(0), np.empty(0), np.empty(0, dtype=np.int64))
-    with compiling(f"ga-{kind.name.lower()}", "the genetic algorithm"):  # before the clock
+    # the loop compiles once per kind and data/aux types: one compile group (and lock) each
+    with compiling(f"ga-{kind.name.lower()}-{_types_key(evolve, (data, aux))}",
+                   "the genetic algorithm"):  # before the clock
         evolve(*probe)
     kernel = compiled_entry(evolve, probe)
 
