@@ -151,14 +151,22 @@ class _PackageCompiles(event.Listener):
             numba.config.OPT = self._saved.pop()  # type: ignore[attr-defined]
 
 
+LOCK_WAIT_S = 900.0
+"""The longest wait for another process's compilation of a group (several cold compiles on a
+busy machine); past it this process compiles the group itself, so a stopped holder cannot
+hang it."""
+
+
 @contextmanager
 def _group_lock(group: str) -> Iterator[None]:
     """Hold ``group``'s lock file in the cache folder (exclusive, across processes).
 
     Two processes that start on a cold cache together (a batch's workers, a test run's)
     would otherwise both compile the same kernels, each for a minute; with the lock the
-    second waits and then loads what the first saved. Where no lock can be taken (no
-    ``fcntl``, an unwritable folder) the block runs unlocked, as before."""
+    second waits and then loads what the first saved. The wait polls (a signal such as
+    Ctrl-C ends it at once) for at most :data:`LOCK_WAIT_S`. Where no lock can be taken
+    (no ``fcntl``, an unwritable folder) or the wait runs out, the block runs unlocked,
+    as before."""
     try:
         import fcntl
 
@@ -167,7 +175,17 @@ def _group_lock(group: str) -> Iterator[None]:
         yield
         return
     try:
-        fcntl.flock(handle, fcntl.LOCK_EX)  # released by close, or by the process's end
+        deadline = time.monotonic() + LOCK_WAIT_S
+        while True:
+            try:  # released by close, or by the process's end
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    break
+                time.sleep(0.1)
+            except OSError:  # a file system without locks
+                break
         yield
     finally:
         handle.close()

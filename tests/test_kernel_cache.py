@@ -243,3 +243,17 @@ def test_a_second_process_waits_for_the_group_being_compiled_and_then_loads_it(
     assert child.returncode == 0, err
     assert (tmp_path / "entered").exists()
     assert "compiling" not in err  # it found the group warm: nothing announced
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="fcntl locks")
+def test_a_held_lock_is_waited_for_at_most_the_lock_wait(tmp_path, monkeypatch):
+    import fcntl
+
+    monkeypatch.setattr(_kernel_cache, "CACHE_DIR", tmp_path)
+    monkeypatch.setattr(_kernel_cache, "LOCK_WAIT_S", 0.3)
+    with open(tmp_path / "stuck.lock", "a") as holder:  # a holder that never lets go
+        fcntl.flock(holder, fcntl.LOCK_EX)
+        entered = []
+        with _kernel_cache._group_lock("stuck"):
+            entered.append(True)
+    assert entered == [True]
