@@ -109,17 +109,21 @@ def decode(genes, length, data, configs):
             b = genes[k]
             ka = off[a + 1] - off[a]
             kb = off[b + 1] - off[b]
+            # row by row (legs is row-major: a column walk misses the cache at every
+            # read of a large M x M matrix); the lowest ca still wins a tie
+            row = legs[off[a], off[b]:off[b] + kb]
+            c0_cost = cost[0]
             for cb in range(kb):
-                col = off[b] + cb
-                best = cost[0] + legs[off[a], col]
-                arg = 0
-                for ca in range(1, ka):
-                    v = cost[ca] + legs[off[a] + ca, col]
-                    if v < best:
-                        best = v
-                        arg = ca
-                new[cb] = best
-                pred[k, cb] = arg
+                new[cb] = c0_cost + row[cb]
+                pred[k, cb] = 0
+            for ca in range(1, ka):
+                row = legs[off[a] + ca, off[b]:off[b] + kb]
+                c_ca = cost[ca]
+                for cb in range(kb):
+                    v = c_ca + row[cb]
+                    if v < new[cb]:
+                        new[cb] = v
+                        pred[k, cb] = ca
             for cb in range(kb):
                 cost[cb] = new[cb]
         last = genes[n - 1]
@@ -327,10 +331,37 @@ def _fixed_matrix(data, configs):
 
 
 @njit(cache=True)
-def _symmetric_round(genes, n, data, aux, configs, ext):
+def symmetric_fixed_matrix(data, configs):
+    """:func:`_fixed_matrix` for symmetric legs (``data.near``'s contract): each leg read
+    once, along its configuration's row, and mirrored (the same values: half the scattered
+    reads of a large leg matrix)."""
+    n = data.dist.shape[0]
+    off = data.offsets
+    has_home = data.home_out.shape[0] > 0
+    out = np.zeros((n + 1, n + 1) if has_home else (n, n))
+    rows = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        rows[i] = off[i] + configs[i]
+    for i in range(n):
+        legs = data.legs[rows[i]]
+        out[i, i] = legs[rows[i]]
+        for j in range(i + 1, n):
+            v = legs[rows[j]]
+            out[i, j] = v
+            out[j, i] = v
+        if has_home:
+            out[n, i] = data.home_out[rows[i]]
+            out[i, n] = data.home_in[rows[i]]
+    return out
+
+
+@njit(cache=True)
+def _symmetric_round(genes, n, data, aux, configs, ext, fixed, fixed_configs):
     """Neighbour-list local search of the order on the decoded configurations, then
     configuration-choosing relocations, until neither improves (symmetric legs).
 
+    ``fixed`` holds the legs at ``fixed_configs`` (:func:`symmetric_fixed_matrix`); it is
+    brought to ``configs`` first and left at the configurations the round ends with.
     Without home the closed tour is searched as it is; the relocations keep the other
     targets' configurations, so re-decoding afterwards (all start configurations) can
     only shorten it further."""
@@ -338,8 +369,7 @@ def _symmetric_round(genes, n, data, aux, configs, ext):
     has_home = data.home_out.shape[0] > 0
     m = _to_ext(genes, n, ext, has_home)
     home = n if has_home else -1
-    fixed = _fixed_matrix(data, configs)
-    fixed_configs = configs[:n].copy()
+    refresh_fixed(fixed, data, configs, fixed_configs)
     for _ in range(100):  # bounded; a pass that gains nothing ends it earlier
         tsp.local_search(ext, m, fixed, near_aux)
         if relocate_pass(ext[:m], data, configs, home) <= 0.0:
@@ -350,9 +380,10 @@ def _symmetric_round(genes, n, data, aux, configs, ext):
 
 @njit(cache=True, inline="always")
 def refresh_fixed(fixed, data, configs, fixed_configs):
-    """Bring ``fixed`` (:func:`_fixed_matrix` of ``fixed_configs``) to ``configs``:
+    """Bring ``fixed`` (:func:`symmetric_fixed_matrix` of ``fixed_configs``) to ``configs``:
     only the rows and columns of targets whose configuration changed, O(N) each where
-    rebuilding is O(N^2); ``fixed_configs`` receives ``configs``."""
+    rebuilding is O(N^2), read along rows (symmetric legs); ``fixed_configs`` receives
+    ``configs``."""
     n = data.dist.shape[0]
     off = data.offsets
     with_home = fixed.shape[0] > n
@@ -361,10 +392,11 @@ def refresh_fixed(fixed, data, configs, fixed_configs):
             continue
         fixed_configs[v] = configs[v]
         row = off[v] + configs[v]
+        legs = data.legs[row]
         for j in range(n):
-            col = off[j] + configs[j]
-            fixed[v, j] = data.legs[row, col]
-            fixed[j, v] = data.legs[col, row]
+            x = legs[off[j] + configs[j]]
+            fixed[v, j] = x
+            fixed[j, v] = x
         if with_home:
             fixed[n, v] = data.home_out[row]
             fixed[v, n] = data.home_in[row]
@@ -387,9 +419,18 @@ def local_search(genes, length, data, aux):
     has_home = data.home_out.shape[0] > 0
     ext = np.empty(n + 1, dtype=genes.dtype)
     symmetric = _has_near(data, n)
+    # with symmetric legs the fixed-configuration legs are kept up to date across rounds
+    fixed = symmetric_fixed_matrix(data, configs) if symmetric else np.zeros((0, 0))
+    fixed_configs = configs.copy()
+    kept_genes = genes[:n].copy()
+    kept_configs = configs.copy()
     for _ in range(100):  # bounded; a round that gains nothing ends it earlier
         if symmetric:
-            _symmetric_round(genes, n, data, aux, configs, ext)
+            tsp.copy_run(kept_genes, 0, genes, 0, n)
+            tsp.copy_run(kept_configs, 0, configs, 0, n)
+            _symmetric_round(genes, n, data, aux, configs, ext, fixed, fixed_configs)
+            if _same(genes, kept_genes, n) and _same(configs, kept_configs, n):
+                break  # nothing moved: the decode would give this tour again
         else:
             m = _to_ext(genes, n, ext, has_home)
             tsp.exact_local_search(ext, m, _fixed_matrix(data, configs), aux)
@@ -399,6 +440,14 @@ def local_search(genes, length, data, aux):
             break
         cost = new_cost
     return n
+
+
+@njit(cache=True, inline="always")
+def _same(a, b, n):
+    for i in range(n):
+        if a[i] != b[i]:
+            return False
+    return True
 
 
 @njit(cache=True, inline="always")
@@ -458,7 +507,7 @@ def iterated_configured_search(genes, n, data, aux, rng, kicks):
     has_home = data.home_out.shape[0] > 0
     ext = np.empty(n + 1, dtype=genes.dtype)
     m = _to_ext(genes, n, ext, has_home)
-    tsp.iterated_local_search(ext, m, _fixed_matrix(data, configs), _near_aux(data, aux),
+    tsp.iterated_local_search(ext, m, symmetric_fixed_matrix(data, configs), _near_aux(data, aux),
                               rng, kicks)
     _from_ext(ext, n, genes, has_home)
     if not has_home:
@@ -496,6 +545,8 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
     switches = np.empty(n, dtype=np.int64)
     walk = genes[:n].copy()
     walk_cost = cost
+    fixed = symmetric_fixed_matrix(data, configs)
+    fixed_configs = configs.copy()
     for _ in range(kicks):
         tsp.copy_run(trial, 0, walk, 0, n)
         decode(trial, n, data, configs)
@@ -519,7 +570,7 @@ def configuration_kicks(genes, n, data, aux, rng, kicks):
                 shift = rng.integers(-(n // 4), n // 4 + 1)
                 for q in range(min(0, shift), max(0, shift)):
                     _flip(trial[(k + q) % n], configs, off, rng)
-        _symmetric_round(trial, n, data, aux, configs, ext)
+        _symmetric_round(trial, n, data, aux, configs, ext, fixed, fixed_configs)
         local_search(trial, n, data, aux)
         new = decode(trial, n, data, configs)
         if new < cost - 1e-12 * max(1.0, cost):
