@@ -27,6 +27,7 @@ every tour's start and precedence are checked from the file.
 
     python benchmarks/gtsplib.py [--seeds 3] [--instances 89pcb442,132d657] [--lns 1]
         [--time-factor 2] [--min-time 1] [--json out/gtsplib.json] [--certify] [--pcgtsp]
+        [--population P]
 
 Times are wall times on a machine that may be shared (the load average is printed): compare
 within one run.
@@ -62,12 +63,18 @@ class CpuBudget:
 
 
 def _run(instance, seed: int, limit: float, lns: int | None,
-         stall: bool = False, clock: str = "cpu") -> tuple[float, float, int, float]:
+         stall: bool = False, clock: str = "cpu",
+         population: int | None = None) -> tuple[float, float, int, float]:
+    from dataclasses import replace
+
     from subtask_opt.base.stop import MaxRuntime, NoImprovement
-    from subtask_opt.tour.solve import SolverParams, solve
+    from subtask_opt.tour.gtsplib import gtsp_params
+    from subtask_opt.tour.solve import solve
 
     problem = instance.problem(lns_steps=None if lns is None else lns * instance.set_count)
-    params = SolverParams(bound_max_nodes=0, runs=None if stall else 1)
+    params = gtsp_params(runs=None if stall else 1)  # what subtask-opt gtsp searches with
+    if population is not None:
+        params = replace(params, population=population)
     budget = CpuBudget(limit) if clock == "cpu" else MaxRuntime(limit)
     stop = [*(params.default_stop(problem.size, configured=True) if stall
               else [NoImprovement(10**6)]), budget]
@@ -97,6 +104,9 @@ def main() -> None:
                         help="what the time limit counts: this process's CPU seconds "
                              "(default; the machine is shared) or wall seconds")
     parser.add_argument("--pcgtsp", action="store_true", help="only part 2, the PCGTSP set")
+    parser.add_argument("--population", type=int, default=None,
+                        help="micro-GA population (default: subtask-opt gtsp's, "
+                             "GTSP_POPULATION)")
     args = parser.parse_args()
     if args.pcgtsp:
         _pcgtsp(args.seeds)
@@ -128,7 +138,7 @@ def main() -> None:
             instance = read_gtsplib(data / f"{name}.gtsp")
             ref = reference.get(name, {})
             limit = max(args.min_time, args.time_factor * ref.get("glns_cpp_s_m4pro", 0.0))
-            runs = [_run(instance, seed, limit, lns, args.stall, args.clock)
+            runs = [_run(instance, seed, limit, lns, args.stall, args.clock, args.population)
                     for seed in range(args.seeds)]
             costs = [r[0] for r in runs]
             bks = ref.get("bks")

@@ -534,6 +534,22 @@ LP_BOUND_MAX_VERTICES = 300
 model has M^2 / 2 edge columns; building it for more would overrun the bound's time)."""
 CERTIFY_MIN_S = 60.0
 """Least time :func:`solve_gtsp`'s certificate may take."""
+GTSP_POPULATION = 8
+"""Micro-GA population of :func:`solve_gtsp` (the arm problems keep 5). Every child of a
+GTSPLIB search carries a large-neighbourhood search of one step per set, so a run makes
+only tens of generations in GLNS's time; with 5 individuals it converges on one deep local
+optimum (132d657 at twice GLNS's time: 22533 from 8 seeds of 8), with 8 it keeps enough
+variety to leave it (22498-22501 from 4 of 8), and 12 or more make too few generations
+(benchmarks/gtsplib.py --population)."""
+
+
+def gtsp_params(runs: int | None = None) -> Any:
+    """The :class:`~subtask_opt.tour.solve.SolverParams` of :func:`solve_gtsp`: ``runs``
+    independent runs (None: the solver's default), :data:`GTSP_POPULATION`, no bound inside
+    the search (the bound is computed after it, in the time left)."""
+    from subtask_opt.tour.solve import SolverParams
+
+    return SolverParams(runs=runs, bound_max_nodes=0, population=GTSP_POPULATION)
 
 
 @dataclass(frozen=True)
@@ -607,7 +623,7 @@ def solve_gtsp(instance: GtspInstance, *, time_limit: float = 10.0, seed: int = 
     from subtask_opt.base.stop import MaxRuntime, as_criteria
     from subtask_opt.tour.bound import lower_bound
     from subtask_opt.tour.configurations import penalty_for_legs
-    from subtask_opt.tour.solve import SolverParams, solve
+    from subtask_opt.tour.solve import solve
 
     if not isinstance(instance, GtspInstance):
         raise ParameterError(f"solve_gtsp needs a GtspInstance, got {type(instance).__name__}")
@@ -615,7 +631,7 @@ def solve_gtsp(instance: GtspInstance, *, time_limit: float = 10.0, seed: int = 
     require_int("solve_gtsp", "seed", seed, 0, 2**63 - 1)
     problem = instance.problem()
     constraints = instance.constraints()
-    params = SolverParams(runs=runs, bound_max_nodes=0)
+    params = gtsp_params(runs)
     configured = not (constraints is not None and constraints.precedence)
     base = as_criteria(stop, params.default_stop(problem.size, configured=configured))
     result = solve(problem, seed=seed, params=params, progress=progress,

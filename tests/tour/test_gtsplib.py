@@ -231,6 +231,36 @@ def test_solve_finds_the_brute_force_optimum(seed, symmetric, lns_steps):
     assert result.total_time == pytest.approx(_brute_force(w, sets))
 
 
+def test_solve_gtsp_searches_with_its_population_and_finds_the_optimum(monkeypatch):
+    import importlib
+
+    from subtask_opt.tour import gtsplib
+
+    solve_module = importlib.import_module("subtask_opt.tour.solve")  # the package's
+    # ``solve`` attribute is the function
+
+    w, sets = _random_instance(3, n_sets=6)
+    m = len(sets)
+    body = "".join(" ".join(str(int(x)) for x in row) + "\n" for row in w)
+    members = "".join(f"{k + 1} " + " ".join(str(v + 1) for v in np.flatnonzero(sets == k))
+                      + " -1\n" for k in range(int(sets.max()) + 1))
+    text = (f"NAME : r\nTYPE : GTSP\nDIMENSION : {m}\nGTSP_SETS : {int(sets.max()) + 1}\n"
+            "EDGE_WEIGHT_TYPE : EXPLICIT\nEDGE_WEIGHT_FORMAT : FULL_MATRIX\n"
+            f"EDGE_WEIGHT_SECTION\n{body}GTSP_SET_SECTION\n{members}EOF\n")
+    seen = []
+    real = solve_module.solve
+
+    def spy(problem, **kwargs):
+        seen.append(kwargs["params"])
+        return real(problem, **kwargs)
+
+    monkeypatch.setattr(solve_module, "solve", spy)
+    solution = solve_gtsp(parse_gtsplib(text), time_limit=5.0, seed=1)
+    assert [p.population for p in seen] == [gtsplib.GTSP_POPULATION]
+    assert gtsplib.GTSP_POPULATION != solve_module.SolverParams().population
+    assert solution.cost == pytest.approx(_brute_force(w, sets))
+
+
 @pytest.mark.parametrize("seed", range(4))
 def test_solve_with_precedence_keeps_it(seed):
     w, sets = _random_instance(seed + 10, n_sets=6, symmetric=False)
