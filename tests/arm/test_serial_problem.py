@@ -303,3 +303,29 @@ def test_executed_joint_moves_take_the_planned_time(phase: bool) -> None:
             i = int(np.argmax(d))
             share = (q[:, i] - q0[i]) / (q1[i] - q0[i])
             np.testing.assert_allclose(q, q0 + share[:, None] * (q1 - q0), atol=1e-12)
+
+
+def test_serial_search_defaults_from_kicks_from_targets() -> None:
+    from subtask_opt.arm.serial_problem import (
+        SERIAL_KICKS,
+        SERIAL_STALL_SHARE,
+        _serial_search_defaults,
+    )
+    from subtask_opt.base.stop import NoImprovement
+    from subtask_opt.tour.permutation import KICKS_FROM
+    from subtask_opt.tour.solve import SolverParams
+
+    params = SolverParams()
+
+    def stall(criteria):
+        return next(c.generations for c in criteria if isinstance(c, NoImprovement))
+
+    small, kicks = _serial_search_defaults(params, KICKS_FROM - 1, None)
+    assert kicks is None and stall(small) == stall(params.default_stop(KICKS_FROM - 1))
+    n = 2 * KICKS_FROM + 45
+    large, kicks = _serial_search_defaults(params, n, None)
+    assert kicks == SERIAL_KICKS
+    assert stall(large) == round(stall(params.default_stop(n)) * SERIAL_STALL_SHARE)
+    assert _serial_search_defaults(params, n, 7)[1] == 7  # given kicks are kept
+    paper = SolverParams(preset="paper")
+    assert _serial_search_defaults(paper, n, None) == (paper.default_stop(n), None)
