@@ -12,17 +12,18 @@ layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
 home -> targets -> home.
 
 Legs are checked for collisions lazily, as GLNS's lazy-edge search evaluates only the
-edges its best tour uses: the straight legs' times are lower bounds of every leg; after a
-search, every leg of the answer not checked before is swept
+edges its best tour uses: the straight legs' times are lower bounds of every leg; every
+new best tour of the search has its legs not checked before swept
 (:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision` with the problem's
 clearance); a leg in collision is planned around the obstacles
 (:func:`~subtask_opt.arm.detour.plan_detour`: OMPL's RRTConnect, simplified, timed
 through its waypoints) and its cost becomes the detour's time, or, when the planner fails
 or its budget (``DetourParams.max_plans`` per solve) is spent, or ``detours=False``, it is
-marked *infeasible* (a large finite penalty, so the GA avoids it). The same order is then
-decoded again on the corrected costs and polished, until the answer uses only verified
-legs (free straight legs and planned detours); then the GA runs once more knowing those
-legs and the shorter answer is kept (:func:`solve_serial_problem`).
+marked *infeasible* (a large finite penalty, so the GA avoids it). The GA evaluates its
+population again on the corrected costs and searches on, so its answer uses only
+verified legs (free straight legs and planned detours; in a cell so cluttered that the
+plan budget runs out, the answers' legs are checked after each search instead:
+:func:`solve_serial_problem`).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal profiles of the same straight lines with the arm's jerk limits
@@ -696,15 +697,21 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
     (:mod:`subtask_opt.tour.pinned_clustered`), which keeps every pair and chooses the
     configurations exactly during the search.
 
-    The first round runs the micro-GA (``stop``; default ``params.default_stop(n)``;
-    ``params.runs`` independent runs, default one).
-    When the answer uses a leg found in collision, that leg is blocked and the same order
-    is decoded again and polished by the local search (a repair round: the blocked leg
-    is usually replaced by another configuration of one of its targets), until a tour
-    uses no leg found in collision. The GA then runs once more from scratch, knowing
-    every leg found so far, and the shorter collision-free answer is kept (repairing
-    alone is quicker but usually ends a little longer: benchmarks/robotsp.py). The GA
-    also runs again when a repair cannot avoid the blocked legs, or after
+    The micro-GA (``stop``; default ``params.default_stop(n)``, see
+    :data:`SERIAL_KICKS`; ``params.runs`` independent runs, default one) checks the legs
+    lazily, GLNS-style, as it searches: the unchecked legs of every new best tour are swept
+    against the scene when it is found (``run_ga``'s ``on_best``); a leg in collision costs
+    its planned detour from then on, or is blocked, the population is evaluated again and
+    the search goes on knowing it, so its answer uses checked legs only.
+    In a cell so cluttered that those checks use up the plan budget
+    (``DetourParams.max_plans``), the budget is better spent on whole answers' legs: the
+    search starts again with every leg unchecked, and the legs are checked after each
+    search instead. Then, when the answer uses a leg found in collision, that leg is
+    blocked and the same order is decoded again and polished by the local search (a repair
+    round: the blocked leg is usually replaced by another configuration of one of its
+    targets), until a tour uses no leg found in collision; the GA then runs once more from
+    scratch, knowing every leg found so far, and the shorter collision-free answer is kept.
+    The GA also runs again when a repair cannot avoid the blocked legs, or after
     :data:`MAX_REPAIRS` repairs in a row.
 
     The legs found in collision are blocked in the problem's leg matrix during the call
@@ -997,9 +1004,12 @@ SERIAL_KICKS = 100
 """Kicks per child of a serial arm's micro-GA from
 :data:`~subtask_opt.tour.permutation.KICKS_FROM` targets (the TSP default there is N/10,
 at most 100), with :data:`SERIAL_STALL_SHARE` of the default stall. On RoboTSP's 245 holes
-(seeds 0-7): N/10 = 24 kicks and the whole stall (24) gave tours of median 63.24 s, mean
-63.26 s, in a median 2.9 s of search CPU; 100 kicks and half the stall 63.16 s, 63.15 s in
-2.0 s; 100 kicks and two thirds 63.13 s, 63.14 s in 2.2 s."""
+(seeds 0-7, the legs checked inside the GA): N/10 = 24 kicks and the whole stall (24) gave
+tours of median 63.34 s, mean 63.32 s, in a median 1.7 s of search CPU; 100 kicks and half
+the stall (12) 63.15 s, 63.25 s in 0.9 s; two thirds (16) 63.15 s, 63.20 s in 1.2 s; 20
+generations 63.12 s, 63.12 s in 1.7 s. (Checking the answers after each search and
+searching again, as before, 24 kicks and 24 gave 63.24 s, 63.26 s in 2.9 s.) Half keeps
+the search within a second or two at the old tours' length; a longer stall buys 0.1-0.2%."""
 SERIAL_STALL_SHARE = 0.5
 """Share of :meth:`~subtask_opt.tour.solve.SolverParams.default_stop`'s stall a serial
 arm's micro-GA keeps from :data:`~subtask_opt.tour.permutation.KICKS_FROM` targets, whose
@@ -1089,6 +1099,84 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     repair = False  # True: the last round blocked legs of the current order
     again = False  # True: search once more knowing the legs found in collision
     best: tuple[float, np.ndarray, np.ndarray] | None = None  # best collision-free answer
+    pinned_dist: list[np.ndarray] = []  # the pinned kind's target costs, kept like data.dist
+    plain_rounds = 0  # GA rounds that did not check legs as they went
+
+    def check_legs(tour: list[int]) -> bool:
+        """Check the legs of ``tour`` (flat configurations, -1 = home) not checked before;
+        one in collision costs its planned detour (within the budget) or the penalty from
+        now on (in ``data``, in place). Returns whether any was in collision."""
+        if problem.checker is None:
+            return False
+        found = False
+        t0 = time.process_time()
+        spent = 0.0  # CPU of the planner inside this loop (not collision checking)
+        for a, b in zip(tour[:-1], tour[1:], strict=True):
+            key = (min(a, b), max(a, b))
+            if key in checked:
+                continue  # verified before: its cost (straight, detour or penalty) is exact
+            q_lo = problem.home if key[0] < 0 else problem.flat[key[0]]
+            q_hi = problem.flat[key[1]]
+            checked[key] = problem.checker.leg_in_collision(q_lo, q_hi, problem.clearance)
+            if not checked[key]:
+                continue
+            found = True
+            cost = penalty
+            if problem.detours and planner["plans"] < detour_params.max_plans:
+                planner["plans"] += 1
+                t1 = time.process_time()
+                detour = plan_detour(problem.checker, q_lo, q_hi, clearance=problem.clearance,
+                                     limits=problem.limits, jerk=problem.arm.limits.jerk,
+                                     seed=seed, params=detour_params, attempts=1)
+                spent += time.process_time() - t1
+                if detour is not None:
+                    detours[key] = detour
+                    cost = detour.planned_time
+            if key[0] < 0:
+                data.home_out[key[1]] = cost
+                if not open_path:  # an open path's return to the home is free
+                    data.home_in[key[1]] = cost
+            else:
+                blocked.setdefault(key, float(data.legs[key]))
+                data.legs[a, b] = data.legs[b, a] = cost
+                ta, tb = owner[a], owner[b]
+                block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
+                data.dist[ta, tb] = data.dist[tb, ta] = block.min()
+                for costs in pinned_dist:
+                    costs[ta, tb] = costs[tb, ta] = data.dist[ta, tb]
+        cpu["collision"] += time.process_time() - t0 - spent
+        cpu["planner"] += spent
+        return found
+
+    in_ga = [0.0]  # CPU of the checks inside a GA round (not search time)
+
+    def check_best(chromosome: np.ndarray) -> bool:
+        """The GA's lazy leg check (``run_ga``'s ``on_best``) of a new best chromosome."""
+        t0 = time.process_time()
+        with compile_seconds() as compiled:  # counted apart already
+            order = (_rotate(chromosome, n)[1:] if shape.pinned
+                     else chromosome).astype(np.int64)
+            choice = np.zeros(n, dtype=np.int64)
+            _gc.decode(order, n, data, choice)
+            found = check_legs([-1] + [int(off[g] + choice[g]) for g in order]
+                               + ([] if open_path else [-1]))
+        spent = time.process_time() - t0
+        in_ga[0] += spent - min(compiled[0], spent)
+        return found
+
+    def forget_checks() -> None:
+        """Every leg back to its straight time, as before any check."""
+        for (a, b), value in blocked.items():
+            data.legs[a, b] = data.legs[b, a] = value
+        blocked.clear()
+        data.dist[:] = problem.dist
+        data.home_out[:] = problem.home_out
+        data.home_in[:] = home_in
+        checked.clear()
+        detours.clear()
+        planner["plans"] = 0
+
+    on_best = check_best if problem.checker is not None else None
     cpu["search"] += time.process_time() - t0
     while True:
         rounds += 1
@@ -1119,6 +1207,8 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
             if bound is not None and stop is None and ga_rounds == 0:
                 criteria = [*criteria, TargetCost(bound * (1 + 1e-12) + 1e-12)]
             ga_rounds += 1
+            plain_rounds += on_best is None
+            in_ga[0] = 0.0
             total = next((c.generations for c in criteria if isinstance(c, MaxGenerations)),
                          None)
             with _compile_apart(cpu) as compiled, progress_bar(
@@ -1130,23 +1220,35 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                     costs[:n, :n] = data.dist
                     pinned = make_pinned_clustered_aux(n + 1, canon.first, canon.last,
                                                        canon.pairs)
-                    outcome = run_ga(use(Kind.PINNED_CLUSTERED), config,
-                                     make_data(costs, data, home=n), pinned, max_genes=n + 1,
-                                     seed=seed, criteria=criteria, on_chunk=on_chunk,
-                                     runs=params.runs or 1)
+                    pinned_data = make_data(costs, data, home=n)
+                    pinned_dist[:] = [pinned_data.dist]
+                    outcome = run_ga(use(Kind.PINNED_CLUSTERED), config, pinned_data, pinned,
+                                     max_genes=n + 1, seed=seed, criteria=criteria,
+                                     on_chunk=on_chunk, runs=params.runs or 1,
+                                     on_best=on_best)
                     genes = _rotate(outcome.genes, n)[1:].astype(np.int64)
                 else:
                     outcome = run_ga(use(Kind.CONFIGURED_PERMUTATION), config, data, aux,
                                      max_genes=n, seed=seed, criteria=criteria,
-                                     on_chunk=on_chunk, runs=params.runs or 1)
+                                     on_chunk=on_chunk, runs=params.runs or 1,
+                                     on_best=on_best)
                     genes = outcome.genes.astype(np.int64)
-            t0 += compiled[0]  # not search time
+            t0 += compiled[0] + in_ga[0]  # not search time
             generations += outcome.generations
             restarts += outcome.restarts
             runtime += outcome.runtime_s
             runs = outcome.runs  # per search (every round makes as many)
             if ga_rounds == 1:
                 history = outcome.history
+            if (on_best is not None and problem.detours
+                    and planner["plans"] >= detour_params.max_plans):
+                # so cluttered a cell that the new bests' legs used up the plan budget: it
+                # is better spent on whole answers' legs, so start again checking those
+                # after each search (repairs, then a second search knowing them)
+                forget_checks()
+                on_best = None
+                cpu["search"] += time.process_time() - t0
+                continue
             cost = float(_gc.decode(genes, n, data, choice))
         cpu["search"] += time.process_time() - t0
         tour = [-1] + [int(off[g] + choice[g]) for g in genes] + ([] if open_path else [-1])
@@ -1157,48 +1259,11 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                 f"no tour avoids the legs in collision ({sum(checked.values())} legs of "
                 f"{len(checked)} checked collide); try a larger axis step sampling, another "
                 "home or fewer obstacles")
-        repair = False
-        t0 = time.process_time()
-        spent = 0.0  # CPU of the planner inside this loop (not collision checking)
-        for a, b in zip(tour[:-1], tour[1:], strict=True):
-            if problem.checker is None:
-                break
-            key = (min(a, b), max(a, b))
-            if key in checked:
-                continue  # verified before: its cost (straight, detour or penalty) is exact
-            q_lo = problem.home if key[0] < 0 else problem.flat[key[0]]
-            q_hi = problem.flat[key[1]]
-            checked[key] = problem.checker.leg_in_collision(q_lo, q_hi, problem.clearance)
-            if not checked[key]:
-                continue
-            repair = True  # a cost of this tour was corrected: decode it again
-            cost = penalty
-            if problem.detours and planner["plans"] < detour_params.max_plans:
-                planner["plans"] += 1
-                t1 = time.process_time()
-                found = plan_detour(problem.checker, q_lo, q_hi, clearance=problem.clearance,
-                                    limits=problem.limits, jerk=problem.arm.limits.jerk,
-                                    seed=seed, params=detour_params, attempts=1)
-                spent += time.process_time() - t1
-                if found is not None:
-                    detours[key] = found
-                    cost = found.planned_time
-            if key[0] < 0:
-                data.home_out[key[1]] = cost
-                if not open_path:  # an open path's return to the home is free
-                    data.home_in[key[1]] = cost
-            else:
-                blocked.setdefault(key, float(data.legs[key]))
-                data.legs[a, b] = data.legs[b, a] = cost
-                ta, tb = owner[a], owner[b]
-                block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
-                data.dist[ta, tb] = data.dist[tb, ta] = block.min()
-        cpu["collision"] += time.process_time() - t0 - spent
-        cpu["planner"] += spent
+        repair = check_legs(tour)  # a cost of this tour was corrected: decode it again
         if not repair:
             if best is None or cost < best[0]:
                 best = (cost, genes.copy(), choice.copy())
-            if ga_rounds == 1 and any(checked.values()):
+            if on_best is None and plain_rounds == 1 and any(checked.values()):
                 again = True
                 continue
             break

@@ -424,6 +424,28 @@ def evolve(kind, pop, lengths, costs, best, best_cost, counters, data, aux, para
     return ran
 
 
+@njit(cache=True)
+def evaluate_rows(kind, pop, lengths, costs, best, best_cost, counters, data, aux):
+    """Every individual's cost and the best's again (``data`` changed in place between
+    generations); the best becomes the cheapest of them (:func:`run_ga`'s ``on_best``).
+    Nothing before the first population (the compiling call)."""
+    if counters[_BEST_LEN] == 0:
+        return
+    for i in range(pop.shape[0]):
+        costs[i] = ops.evaluate(kind, pop[i], lengths[i], data, aux)
+    best_cost[0] = ops.evaluate(kind, best, counters[_BEST_LEN], data, aux)
+    i_best = np.argmin(costs)
+    if costs[i_best] < best_cost[0]:
+        best_cost[0] = costs[i_best]
+        counters[_BEST_LEN] = lengths[i_best]
+        copy_run(best, 0, pop[i_best], 0, lengths[i_best])
+
+
+MAX_BEST_CHECKS = 10_000
+"""Most times :func:`run_ga` shows ``on_best`` a best after one generation (each call that
+changes costs may make another individual the best)."""
+
+
 def compiled_entry(kernel: Any, args: tuple[Any, ...]) -> Any:
     """The machine-code entry point ``kernel`` was compiled to for arguments typed as
     ``args`` (call it once with them first), or ``kernel`` itself when there is none
@@ -459,6 +481,7 @@ def run_ga(
     criteria: list[StoppingCriterion],
     on_chunk: Callable[[Progress], None] | None = None,
     runs: int = 1,
+    on_best: Callable[[np.ndarray], bool] | None = None,
 ) -> GAOutcome:
     """Run the GA until a stopping criterion holds (see :func:`run_in_chunks`).
 
@@ -474,6 +497,14 @@ def run_ga(
     end them all. The history runs on through the runs (a new run counts as a
     restart), and so do ``generations`` and ``restarts``; ``GAOutcome.runs`` is how
     many ran.
+
+    ``on_best(genes)`` (a lazy cost check) is shown every new best chromosome, after each
+    generation (the GA then runs one generation per kernel call, so a seeded run does not
+    depend on the machine's speed). It returns True when it changed costs in ``data`` in
+    place (say, a leg of that tour found blocked): the population and the best are then
+    evaluated again (:func:`evaluate_rows`) and the best, which may be another individual
+    now, is shown in turn, until it returns False. The kept best of several runs is
+    compared on the costs of its own run.
     """
     if ops.registered(kind) is None:
         raise ParameterError(f"run_ga: no operators are registered for {kind!r}")
@@ -500,7 +531,20 @@ def run_ga(
     with compiling(f"ga-{kind.name.lower()}-{_types_key(evolve, (data, aux))}",
                    "the genetic algorithm"):  # before the clock
         evolve(*probe)
+        if on_best is not None:
+            evaluate_rows(code, pop, lengths, costs, best, best_cost, counters, data, aux)
     kernel = compiled_entry(evolve, probe)
+    shown = [math.inf]  # the cost of the last best on_best accepted
+
+    def show_best() -> None:
+        assert on_best is not None
+        if best_cost[0] >= shown[0]:
+            return
+        for _ in range(MAX_BEST_CHECKS):
+            if not on_best(best[:counters[_BEST_LEN]].copy()):
+                break
+            evaluate_rows(code, pop, lengths, costs, best, best_cost, counters, data, aux)
+        shown[0] = best_cost[0]
 
     start = time.perf_counter()
     hist_best: list[np.ndarray] = []
@@ -509,8 +553,19 @@ def run_ga(
 
     def run_chunk(n_gens: int) -> int:
         hb, hm, hr = np.empty(n_gens), np.empty(n_gens), np.empty(n_gens, dtype=np.int64)
-        ran = kernel(code, pop, lengths, costs, best, best_cost, counters, data,
-                     aux, params, rng, n_gens, stall_limit, target, hb, hm, hr)
+        if on_best is None:
+            ran = kernel(code, pop, lengths, costs, best, best_cost, counters, data,
+                         aux, params, rng, n_gens, stall_limit, target, hb, hm, hr)
+        else:  # one generation at a time, each new best shown
+            ran = 0
+            while ran < n_gens:
+                step = kernel(code, pop, lengths, costs, best, best_cost, counters, data,
+                              aux, params, rng, 1, stall_limit, target, hb[ran:], hm[ran:],
+                              hr[ran:])
+                show_best()
+                if step == 0:
+                    break
+                ran += step
         hist_best.append(hb[:ran])
         hist_mean.append(hm[:ran])
         hist_restart.append(hr[:ran])
@@ -532,6 +587,7 @@ def run_ga(
                 break
             rng = np.random.default_rng([seed, run])
             counters[:] = 0  # a fresh population: the kernel initialises it
+            shown[0] = math.inf
             run_starts.append(generations)
         run_in_chunks(run_chunk, lambda: _progress(counters, best_cost, start), criteria,
                       report)

@@ -155,3 +155,59 @@ def test_compiled_entry_is_the_kernel_for_those_types_or_the_kernel_itself():
         return x
 
     assert compiled_entry(plain, args) is plain
+
+
+def _run_lazy(m, on_best, seed=0):
+    aux = make_aux(neighbour_table(m), nearest_fallback=True, search=SEARCH_FAST)
+    return run_ga(use(Kind.PERMUTATION), GAConfig(), m, aux, max_genes=m.shape[0], seed=seed,
+                  criteria=[NoImprovement(30), MaxGenerations(2000)], on_best=on_best)
+
+
+def test_an_on_best_that_changes_nothing_leaves_the_run_as_it_was():
+    m = _matrix(seed=3)
+    shown = []
+
+    def record(genes):
+        shown.append(genes)
+        return False
+
+    plain = _run_lazy(m.copy(), None, seed=4)
+    lazy = _run_lazy(m.copy(), record, seed=4)
+    np.testing.assert_array_equal(plain.genes, lazy.genes)
+    np.testing.assert_array_equal(plain.history.best_cost, lazy.history.best_cost)
+    assert shown and np.array_equal(shown[-1], lazy.genes)  # every new best, the last too
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_costs_revealed_lazily_give_the_optimum_of_the_true_costs(seed):
+    # the GA starts on cheap costs; on_best reveals the true cost of each of the best tour's
+    # edges as it meets them (a lazy collision check): the answer is optimal for the true
+    # costs (brute force) and its cost is its true cost
+    import itertools
+
+    n = 8
+    rng = np.random.default_rng(seed)
+    hidden = np.triu(rng.random((n, n)) < 0.3, 1)
+    hidden |= hidden.T
+    true = _matrix(seed=seed, n=n) + np.where(hidden, 5.0, 0.0)
+    m = _matrix(seed=seed, n=n)  # what the GA knows at first
+    revealed = set()
+
+    def on_best(genes):
+        changed = False
+        for a, b in zip(genes, np.roll(genes, -1), strict=True):
+            key = (min(a, b), max(a, b))
+            if key not in revealed:
+                revealed.add(key)
+                if m[a, b] != true[a, b]:
+                    m[a, b] = m[b, a] = true[a, b]
+                    changed = True
+        return changed
+
+    out = _run_lazy(m, on_best, seed=seed)
+    cost = float(true[out.genes, np.roll(out.genes, -1)].sum())
+    assert cost == pytest.approx(out.cost)
+    best = min(float(true[list(t), np.roll(list(t), -1)].sum())
+               for t in ((0, *p) for p in itertools.permutations(range(1, n))))
+    assert cost == pytest.approx(best)
+    assert any(hidden[k] for k in revealed)  # the search did meet hidden costs
