@@ -1072,8 +1072,11 @@ class IKSolver:
             require_int("IKSolver", "seed", seed, 0)
         if self.ur is not None or self.spherical is not None:
             return self._solve_targets_batched(targets)
+        from subtask_opt.base.stop import check_time_limit
+
         configurations, indices = [], []
         for i, block in enumerate(targets.poses):
+            check_time_limit(f"in the IK (target {i + 1} of {len(targets.poses)})")
             sols: list[np.ndarray] = []
             idx: list[int] = []
             for j, pose in enumerate(block):

@@ -18,7 +18,7 @@ import numpy as np
 from subtask_opt._kernel_cache import compiling
 from subtask_opt.arm.report import tour_report
 from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
-from subtask_opt.base.stop import StoppingCriterion
+from subtask_opt.base.stop import StoppingCriterion, check_time_limit
 from subtask_opt.tour.clustered import ConfiguredData
 from subtask_opt.tour.constraints import TourConstraints, checked
 from subtask_opt.tour.problem import ClusteredProblem, MatrixProblem, _validated_order
@@ -116,9 +116,11 @@ class PlanarProblem:
         if not isinstance(self.check_all_legs, bool):
             raise ParameterError(f"PlanarProblem.check_all_legs must be True or False, "
                                  f"got {self.check_all_legs!r}")
+        check_time_limit("before the leg times")
         with compiling(f"timing-{self.time_model}", "the time-model kernels"):
             timing = travel_times(self.subtasks, self.arm, self.time_model, k=self.k,
                                   elbow=self.elbow, line_fallback=self.line_fallback)
+        check_time_limit(f"in the leg times of {len(self.subtasks)} subtasks")
         object.__setattr__(self, "timing", timing)
         if mode == "optimize":
             if timing.branch_times is None:

@@ -61,7 +61,7 @@ from subtask_opt.base.errors import (
     require_in_range,
     require_int,
 )
-from subtask_opt.base.stop import Progress, StoppingCriterion, as_criteria
+from subtask_opt.base.stop import Progress, StoppingCriterion, as_criteria, check_time_limit
 from subtask_opt.chromosomes import use
 from subtask_opt.tour import clustered as _gc
 from subtask_opt.tour.constraints import Canonical, TourConstraints
@@ -276,6 +276,7 @@ class SerialProblem:
                                  f"{self.legs_mode!r}")
         params = self.ik if self.ik is not None else IKParams(wrap_alternatives=False)
         mode = _legs_mode(self, params)
+        check_time_limit("before the IK")
         with _phase(cpu, "ik"), _ticker(f"IK of {len(self.targets)} targets"):
             solutions = IKSolver(arm, params).solve_targets(self.targets, seed=self.ik_seed)
         for i, q in enumerate(solutions.configurations):
@@ -296,6 +297,8 @@ class SerialProblem:
             point = np.round(self.targets.points[i], 6).tolist()
             bar.update(1)
             if checker is not None:
+                check_time_limit(f"in the collision checks (target {i + 1} of "
+                                 f"{len(self.targets)})")
                 t0 = time.process_time()
                 free = np.array([not checker.in_collision(c) for c in q], dtype=bool)
                 cpu["collision"] += time.process_time() - t0
@@ -312,12 +315,14 @@ class SerialProblem:
         counts = np.array([q.shape[0] for q in configs], dtype=np.int64)
         offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
         flat = np.ascontiguousarray(np.vstack(configs))
+        check_time_limit(f"before the legs between {flat.shape[0]} configurations")
         with _phase(cpu, "matrix"), _ticker(f"legs between {flat.shape[0]} configurations"):
             memory = joint_leg_square(flat, self.limits)
             legs = memory.view()
             home_out = joint_leg_times(home, flat, self.limits)[0]
             home_in = home_out.copy()  # a leg takes as long either way
             dist, cheapest, top = _gc.block_minima(memory, offsets)
+        check_time_limit(f"in the legs between {flat.shape[0]} configurations")
         penalty = (len(configs) + 2) * max(float(top), float(home_out.max())) + 1.0
         for name, value in (("configurations", tuple(configs)), ("offsets", offsets),
                             ("flat", flat), ("legs", legs), ("dist", dist),
@@ -460,6 +465,7 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
                            unit="target")
         for t in range(o1.shape[0] - 1):
             bar.update(1)
+            check_time_limit(f"in the collision checks (target {t + 1} of {o1.shape[0] - 1})")
             rows = np.arange(o1[t], o1[t + 1])
             first = rows[cap_keep[rows]]
             free[first] = [not checker.in_collision(q) for q in f1[first]]
@@ -477,9 +483,11 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
         cap_keep &= free
         cpu["collision"] += time.process_time() - t0
     f2, o2, h2 = _subset(f1, o1, cap_keep, h1)
+    check_time_limit(f"before the candidate legs of {o2.shape[0] - 1} targets")
     with _phase(cpu, "matrix"), _ticker(f"candidate legs of {o2.shape[0] - 1} targets"):
         penalty = _sparse_penalty(f2, o2, h2, lim)
         data = sl.build_sparse(f2, o2, points, h2, lim, penalty=penalty)
+    check_time_limit(f"in the candidate legs of {o2.shape[0] - 1} targets")
     configs = tuple(np.ascontiguousarray(f2[o2[t]:o2[t + 1]]) for t in range(o2.shape[0] - 1))
     for q in configs:
         q.setflags(write=False)

@@ -32,6 +32,10 @@ class NoPathError(SubtaskOptError):
     """No collision-free path exists between the requested points."""
 
 
+class TimeLimitReached(SubtaskOptError):
+    """A job's time limit ran out before it could answer (the CLI exits 1: the job ran)."""
+
+
 def require_positive(owner: str, name: str, value: float) -> None:
     """Raise :class:`ParameterError` unless ``value`` is finite and > 0."""
     if not _is_finite_number(value) or value <= 0:

@@ -10,17 +10,53 @@ whatever the chunking, and a seeded run is reproducible.
 
 from __future__ import annotations
 
+import contextvars
 import math
 import numbers
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 from subtask_opt.base.errors import (
     ParameterError,
+    TimeLimitReached,
     require_int,
     require_non_negative,
     require_positive,
 )
+
+_LIMIT: contextvars.ContextVar[tuple[float, float] | None] = contextvars.ContextVar(
+    "time_limit", default=None)  # (monotonic deadline, seconds)
+
+
+@contextmanager
+def time_limit(seconds: float | None, *, started: float | None = None) -> Iterator[None]:
+    """Work inside the block that asks :func:`check_time_limit` (building an arm problem:
+    IK, collision checks, leg times) stops with :class:`TimeLimitReached` once ``seconds``
+    of wall time have passed since ``started`` (a ``time.monotonic()`` reading; None: the
+    block's start); ``seconds`` None: no limit. The CLI's ``--time-limit`` wraps the
+    problem's construction in it (the search has its own :class:`MaxRuntime`, from what is
+    left)."""
+    if seconds is None:
+        yield
+        return
+    require_positive("time_limit", "seconds", seconds)
+    begin = time.monotonic() if started is None else float(started)
+    token = _LIMIT.set((begin + float(seconds), float(seconds)))
+    try:
+        yield
+    finally:
+        _LIMIT.reset(token)
+
+
+def check_time_limit(doing: str) -> None:
+    """Raise :class:`TimeLimitReached` naming ``doing`` (what the work was about to do or
+    was doing) if the enclosing :func:`time_limit` has run out."""
+    limit = _LIMIT.get()
+    if limit is not None and time.monotonic() >= limit[0]:
+        raise TimeLimitReached(f"the time limit of {limit[1]:g} s ran out {doing}")
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from subtask_opt.base.errors import NoPathError, SubtaskOptError
+from subtask_opt.base.errors import NoPathError, SubtaskOptError, TimeLimitReached
 from subtask_opt.cli._common import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK
 
 EPILOG = ("exit codes: 0 the job succeeded; 1 it ran and failed (no path, stall, collision, "
@@ -100,7 +100,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     try:
         return int(args.handler(args) or EXIT_OK)
-    except NoPathError as exc:  # the job ran, and no answer exists
+    except (NoPathError, TimeLimitReached) as exc:  # the job ran, and found no answer
         print(f"subtask-opt: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
     except SubtaskOptError as exc:

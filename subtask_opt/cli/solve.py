@@ -191,8 +191,11 @@ def run(args: argparse.Namespace) -> int:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         from subtask_opt.arm.serial_problem import build_progress
+        from subtask_opt.base.stop import time_limit
 
-        with build_progress(not args.no_progress):
+        # --time-limit bounds the build too (checked between its steps), then the search
+        with build_progress(not args.no_progress), time_limit(args.max_runtime,
+                                                              started=started):
             problem = ArmProblem(_targets(args, robot), robot, home=_home(args, robot),
                                  **_problem_options(args, robot.planar))
     for w in caught:

@@ -110,3 +110,32 @@ def test_run_in_chunks_ends_when_the_kernel_stops_itself():
     state, run_chunk, progress = _fake_kernel(stall_at=70)
     run_in_chunks(run_chunk, progress, [MaxRuntime(60.0)])
     assert state["gen"] == 70
+
+
+def test_time_limit_raises_once_it_has_run_out_and_names_the_step():
+    import time
+
+    from subtask_opt.base.errors import TimeLimitReached
+    from subtask_opt.base.stop import check_time_limit, time_limit
+
+    check_time_limit("outside any limit")  # no limit: nothing happens
+    with time_limit(None):
+        check_time_limit("without a limit")
+    with time_limit(60.0):
+        check_time_limit("well within it")
+        with time_limit(1e-6):  # the inner limit holds inside, then the outer one again
+            time.sleep(0.01)
+            with pytest.raises(TimeLimitReached, match=r"1e-06 s ran out in step 3"):
+                check_time_limit("in step 3")
+        check_time_limit("back within the outer limit")
+    started = time.monotonic() - 10.0  # counted from an earlier start
+    with time_limit(5.0, started=started), pytest.raises(TimeLimitReached):
+        check_time_limit("late")
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf"), "5"])
+def test_time_limit_refuses_a_bad_number_of_seconds(bad):
+    from subtask_opt.base.stop import time_limit
+
+    with pytest.raises(ParameterError, match="seconds"), time_limit(bad):
+        pass

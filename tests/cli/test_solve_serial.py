@@ -144,3 +144,16 @@ def test_legs_that_do_not_fit_in_memory_are_refused_before_any_ik(files, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and "GiB" in err[0] and "memory available" in err[0]
+
+
+@pytest.mark.parametrize("robot", ["ur5", "planar_2r"])
+def test_a_time_limit_that_runs_out_while_building_fails_in_one_line(files, robot,
+                                                                      capsys) -> None:
+    # the limit bounds the problem's construction too: it runs out before any search
+    args = (_base(files) if robot == "ur5" else
+            ["solve", "--case", "random30", "--seed", "0"]) + ["--time-limit", "1e-9",
+                                                              "--no-progress"]
+    code = main(args)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1
+    assert len(err) == 1 and "the time limit of 1e-09 s ran out" in err[0], err
