@@ -24,13 +24,32 @@ from subtask_opt.arm.tasks import random_subtasks, save_subtasks
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def _as_a_shell_starts_it() -> None:
+    """Ctrl-C at its default action in the command, as a shell starts it: a process that
+    ignores SIGINT passes that on to what it starts, and a test runner's worker may have
+    inherited it (the command would then never see the Ctrl-C)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def _catches_sigint(pid: int) -> bool:
+    """Whether process ``pid`` has a SIGINT handler (Linux; True where it cannot tell)."""
+    status = Path(f"/proc/{pid}/status")
+    if not status.exists():
+        return True
+    caught = next(int(line.split()[1], 16) for line in status.read_text().splitlines()
+                  if line.startswith("SigCgt:"))
+    return bool(caught >> (signal.SIGINT - 1) & 1)
+
+
 def _interrupt(argv: list[str], cwd: Path, after_s: float) -> subprocess.CompletedProcess:
     env = dict(os.environ, PYTHONPATH=str(ROOT), MPLBACKEND="Agg")
     proc = subprocess.Popen([sys.executable, "-m", "subtask_opt.cli", *argv], cwd=cwd,
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+                            text=True, start_new_session=True,
+                            preexec_fn=_as_a_shell_starts_it)
     time.sleep(after_s)
     assert proc.poll() is None, proc.communicate()
+    assert _catches_sigint(proc.pid), "the command does not handle Ctrl-C"
     os.killpg(proc.pid, signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     return subprocess.CompletedProcess(argv, proc.returncode, out, err)
