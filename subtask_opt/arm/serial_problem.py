@@ -21,8 +21,8 @@ through its waypoints) and its cost becomes the detour's time, or, when the plan
 or its budget (``DetourParams.max_plans`` per solve) is spent, or ``detours=False``, it is
 marked *infeasible* (a large finite penalty, so the GA avoids it). The GA evaluates its
 population again on the corrected costs and searches on, so its answer uses only
-verified legs (free straight legs and planned detours; in a cell so cluttered that the
-plan budget runs out, the answers' legs are checked after each search instead:
+verified legs (free straight legs and planned detours; in a cell so cluttered that this
+takes much of the plan budget, the answers' legs are checked after each search instead:
 :func:`solve_serial_problem`).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
@@ -686,6 +686,14 @@ class SerialReport(ArmReport):
 MAX_ROUNDS = 200
 """Most GA searches of the lazy leg check before :func:`solve_serial_problem` gives up."""
 MAX_REPAIRS = 100
+CLUTTERED_SHARE = 0.25
+"""A GA that checks its new bests' legs stops once they have taken more than this share of
+the plan budget (``DetourParams.max_plans``): the cell is cluttered, and the search starts
+again checking whole answers' legs (:func:`solve_serial_problem`)."""
+
+
+class _Cluttered(Exception):
+    """Raised through the GA by its lazy leg check when the cell is cluttered."""
 """Most repair rounds in a row before :func:`solve_serial_problem` runs the GA again."""
 
 
@@ -711,10 +719,10 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
     against the scene when it is found (``run_ga``'s ``on_best``); a leg in collision costs
     its planned detour from then on, or is blocked, the population is evaluated again and
     the search goes on knowing it, so its answer uses checked legs only.
-    In a cell so cluttered that those checks use up the plan budget
-    (``DetourParams.max_plans``), the budget is better spent on whole answers' legs: the
-    search starts again with every leg unchecked, and the legs are checked after each
-    search instead. Then, when the answer uses a leg found in collision, that leg is
+    In a cell so cluttered that those checks take more than :data:`CLUTTERED_SHARE` of the
+    plan budget (``DetourParams.max_plans``), the budget is better spent on whole answers'
+    legs: the search starts again with every leg unchecked, and the legs are checked after
+    each search instead. Then, when the answer uses a leg found in collision, that leg is
     blocked and the same order is decoded again and polished by the local search (a repair
     round: the blocked leg is usually replaced by another configuration of one of its
     targets), until a tour uses no leg found in collision; the GA then runs once more from
@@ -1170,6 +1178,8 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                                + ([] if open_path else [-1]))
         spent = time.process_time() - t0
         in_ga[0] += spent - min(compiled[0], spent)
+        if problem.detours and planner["plans"] > detour_params.max_plans * CLUTTERED_SHARE:
+            raise _Cluttered
         return found
 
     def forget_checks() -> None:
@@ -1223,40 +1233,43 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
                     progress, total=total, desc=f"micro-GA round {ga_rounds}",
                     unit="gen") as bar:
                 on_chunk = _reporter(bar)
-                if shape.pinned:  # the order and the configurations together, pairs kept
-                    costs = np.array(canon.matrix)
-                    costs[:n, :n] = data.dist
-                    pinned = make_pinned_clustered_aux(n + 1, canon.first, canon.last,
-                                                       canon.pairs)
-                    pinned_data = make_data(costs, data, home=n)
-                    pinned_dist[:] = [pinned_data.dist]
-                    outcome = run_ga(use(Kind.PINNED_CLUSTERED), config, pinned_data, pinned,
-                                     max_genes=n + 1, seed=seed, criteria=criteria,
-                                     on_chunk=on_chunk, runs=params.runs or 1,
-                                     on_best=on_best)
-                    genes = _rotate(outcome.genes, n)[1:].astype(np.int64)
-                else:
-                    outcome = run_ga(use(Kind.CONFIGURED_PERMUTATION), config, data, aux,
-                                     max_genes=n, seed=seed, criteria=criteria,
-                                     on_chunk=on_chunk, runs=params.runs or 1,
-                                     on_best=on_best)
-                    genes = outcome.genes.astype(np.int64)
+                try:
+                    if shape.pinned:  # the order and the configurations together, pairs kept
+                        costs = np.array(canon.matrix)
+                        costs[:n, :n] = data.dist
+                        pinned = make_pinned_clustered_aux(n + 1, canon.first, canon.last,
+                                                           canon.pairs)
+                        pinned_data = make_data(costs, data, home=n)
+                        pinned_dist[:] = [pinned_data.dist]
+                        outcome = run_ga(use(Kind.PINNED_CLUSTERED), config, pinned_data,
+                                         pinned, max_genes=n + 1, seed=seed,
+                                         criteria=criteria, on_chunk=on_chunk,
+                                         runs=params.runs or 1, on_best=on_best)
+                        genes = _rotate(outcome.genes, n)[1:].astype(np.int64)
+                    else:
+                        outcome = run_ga(use(Kind.CONFIGURED_PERMUTATION), config, data, aux,
+                                         max_genes=n, seed=seed, criteria=criteria,
+                                         on_chunk=on_chunk, runs=params.runs or 1,
+                                         on_best=on_best)
+                        genes = outcome.genes.astype(np.int64)
+                except _Cluttered:
+                    outcome = None
             t0 += compiled[0] + in_ga[0]  # not search time
+            if outcome is None:
+                # so cluttered a cell that the new bests' legs take much of the plan budget:
+                # it is better spent on whole answers' legs, so start again checking those
+                # after each search (repairs, then a second search knowing them)
+                forget_checks()
+                on_best = None
+                ga_rounds -= 1
+                cpu["search"] += time.process_time() - t0
+                continue
             generations += outcome.generations
             restarts += outcome.restarts
             runtime += outcome.runtime_s
             runs = outcome.runs  # per search (every round makes as many)
             if ga_rounds == 1:
                 history = outcome.history
-            if (on_best is not None and problem.detours
-                    and planner["plans"] >= detour_params.max_plans):
-                # so cluttered a cell that the new bests' legs used up the plan budget: it
-                # is better spent on whole answers' legs, so start again checking those
-                # after each search (repairs, then a second search knowing them)
-                forget_checks()
-                on_best = None
-                cpu["search"] += time.process_time() - t0
-                continue
             cost = float(_gc.decode(genes, n, data, choice))
         cpu["search"] += time.process_time() - t0
         tour = [-1] + [int(off[g] + choice[g]) for g in genes] + ([] if open_path else [-1])
