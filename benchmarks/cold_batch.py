@@ -59,8 +59,8 @@ def main() -> int:
     ap.add_argument("--subtasks", type=int, default=20)
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import random_subtasks, save_subtasks
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     arm = load_planar_arm("planar_2r")
     with tempfile.TemporaryDirectory(prefix="cold-batch-") as tmp:

@@ -7,7 +7,7 @@ move from one group to the other sweeps the drill or the wrist through the pilla
 without detours (``detours=False``, what ``solve --no-detours`` sets) the tour must cross
 by legs that go around it within one straight joint line (from a home or through
 configurations chosen for that), while with detours the search plans the crossing legs
-(OMPL RRTConnect, :mod:`subtask_opt.arm.detour`) and takes them when they are faster.
+(OMPL RRTConnect, :mod:`subtask_opt.cell.detour`) and takes them when they are faster.
 
 For each seed both variants are solved on the same problem data; each executed
 trajectory is validated (:func:`subtask_opt.validate`: samples and every joint segment
@@ -39,7 +39,7 @@ SHEET = {"center": (0.5, 0.0, 0.05), "curvature": 0.6}
 
 def write_cell(folder: Path, per_row: int) -> tuple[Path, Path]:
     """The scene file (sheet and pillar STLs, table box, drill on tool0) and the holes."""
-    from subtask_opt.arm.meshes import box_triangles, curved_sheet, write_stl
+    from subtask_opt.cell.meshes import box_triangles, curved_sheet, write_stl
 
     write_stl(folder / "sheet.stl", *curved_sheet(SHEET["center"], (0.3, 0.8),
                                                   SHEET["curvature"]))
@@ -72,8 +72,8 @@ def solve_variant(scene: Path, holes: Path, *, detours: bool, seed: int,
                   plans: int) -> dict[str, Any]:
     """One solve of the cell; its figures (a JSON-ready dict)."""
     import subtask_opt as so
-    from subtask_opt.arm.detour import DetourParams
     from subtask_opt.arm.problem import ArmProblem, load_robot, load_targets
+    from subtask_opt.cell.detour import DetourParams
 
     targets = load_targets(holes, standoff=0.05, axis_step=45.0)
     c0 = time.process_time()

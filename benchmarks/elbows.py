@@ -23,10 +23,10 @@ from pathlib import Path
 from typing import Any
 
 from subtask_opt import SolverParams, solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.stop import MaxGenerations, NoImprovement
+from subtask_opt.kinematics.planar import load_planar_arm
 
 ROBOTS = ("planar_2r", "asr_twodof")
 

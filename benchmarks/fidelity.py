@@ -36,10 +36,10 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt import builtin_case, solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.trajectory import build_trajectory, validate
 from subtask_opt.base.progress import progress_bar
+from subtask_opt.kinematics.planar import load_planar_arm
 
 ROBOTS = ("planar_2r", "asr_twodof")
 MODELS = ("paper", "trapezoid", "line", "joint")

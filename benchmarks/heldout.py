@@ -49,11 +49,11 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt import builtin_case, milp_optimum, solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import SubtaskOptError
 from subtask_opt.base.progress import progress_bar
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.configurations import configuration_graph
 from subtask_opt.tour.exact import tour_length
 from subtask_opt.tour.peers import noon_bean_matrix

@@ -48,10 +48,10 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt import SolverParams, builtin_case, milp_optimum, solve
-from subtask_opt.arm.model import CartesianLimits, load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.base.stop import MaxGenerations, TargetCost
 from subtask_opt.ga.config import GAConfig
+from subtask_opt.kinematics.planar import CartesianLimits, load_planar_arm
 from subtask_opt.tour.exact import optimal_tours
 from subtask_opt.tour.problem import MatrixProblem
 

@@ -25,10 +25,10 @@ import time
 
 import numpy as np
 
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import SubtaskOptError
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.configurations import best_configurations
 from subtask_opt.tour.constraints import TourConstraints, canonical, transform_tensor
 from subtask_opt.tour.exact import clustered_held_karp, milp_pinned_clustered

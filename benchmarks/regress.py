@@ -235,11 +235,11 @@ def _robotsp(data: Path) -> dict[str, Any]:
     import numpy as np
 
     try:
-        from subtask_opt.arm.ik import IKParams
         from subtask_opt.arm.poses import make_targets
-        from subtask_opt.arm.scene import Scene
-        from subtask_opt.arm.serial import load_serial_arm
         from subtask_opt.arm.serial_problem import SerialProblem
+        from subtask_opt.cell.scene import Scene
+        from subtask_opt.kinematics.ik import IKParams
+        from subtask_opt.kinematics.serial import load_serial_arm
     except ImportError as exc:
         return {"unavailable": f"no serial arms in this tree ({exc.name})"}
     try:

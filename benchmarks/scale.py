@@ -39,8 +39,8 @@ def one(n: int, seed: int, legs_mode: str) -> dict[str, Any]:
     """Build and solve one size in this process; its figures."""
     from subtask_opt.arm.panel import wing_panel
     from subtask_opt.arm.poses import make_targets
-    from subtask_opt.arm.serial import load_serial_arm
     from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     wall0 = time.monotonic()
     arm = load_serial_arm("ur10")
@@ -76,12 +76,12 @@ def compare(seed: int, robotsp_sizes: list[int], panels: list[int]) -> list[dict
     """Dense against sparse legs on the same problems, the same seed (module doc)."""
     from pathlib import Path
 
-    from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.panel import wing_panel
     from subtask_opt.arm.poses import make_targets
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import load_serial_arm
     from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
+    from subtask_opt.cell.scene import Scene
+    from subtask_opt.kinematics.ik import IKParams
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     cases: list[tuple[str, Any, Any, Any, Any]] = []
     data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "robotsp"

@@ -31,11 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from subtask_opt import SolverParams, builtin_case, milp_optimum, solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.base.progress import progress_bar
 from subtask_opt.batch import map_jobs
 from subtask_opt.cli._common import add_workers, where_text, workers_options
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.exact import tour_length
 from subtask_opt.tour.problem import MatrixProblem
 

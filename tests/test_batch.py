@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 
 from subtask_opt import solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import builtin_case, load_subtasks, random_subtasks, save_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
@@ -32,6 +31,7 @@ from subtask_opt.batch import (
     solve_many,
 )
 from subtask_opt.batch.pool import chunk_size, dask_available, job_indices
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.problem import MatrixProblem
 
 STOP = [NoImprovement(10), MaxGenerations(400)]

@@ -25,7 +25,6 @@ import numpy as np
 import pytest
 
 from subtask_opt import solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import builtin_case, random_subtasks, save_subtasks
 from subtask_opt.base.errors import ParameterError
@@ -33,6 +32,7 @@ from subtask_opt.base.stop import MaxGenerations, NoImprovement
 from subtask_opt.batch import Job, map_jobs, solve_many
 from subtask_opt.batch.pool import JobCrashed, JobTimeout
 from subtask_opt.cli.app import main
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.problem import MatrixProblem
 
 ROOT = Path(__file__).resolve().parents[1]

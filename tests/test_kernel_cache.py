@@ -95,8 +95,8 @@ def test_an_empty_cache_is_announced_before_any_kernel_and_a_filled_one_is_not(
 _FIRST_KERNEL = """
 import numba, numpy as np
 from numba.core import event
-from subtask_opt.arm import _kinematics_kernels as k
-from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.kinematics import _kernels as k
+from subtask_opt.kinematics.planar import load_planar_arm
 
 levels = {}
 class Levels(event.Listener):  # registered after the package's own listener

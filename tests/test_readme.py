@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from subtask_opt import solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import load_subtasks
 from subtask_opt.cli import main
+from subtask_opt.kinematics.planar import load_planar_arm
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

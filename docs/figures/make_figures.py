@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 
 from subtask_opt import builtin_case, solve
-from subtask_opt.arm.model import load_planar_arm
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem  # noqa: E402
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks  # noqa: E402
 from subtask_opt.plotting.sequencing import save_solution_figure  # noqa: E402

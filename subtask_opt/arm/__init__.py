@@ -1,4 +1,6 @@
-"""The arm product: robot model, subtasks, time models, sequencing, trajectories, exact oracles.
+"""The arm product: one robot, targets, leg-time models, the problem compiled into a tour,
+trajectories and reports. Kinematics live in :mod:`subtask_opt.kinematics`, the cell's
+geometry in :mod:`subtask_opt.cell`.
 
 The public names are re-exported by :mod:`subtask_opt`.
 """

@@ -26,9 +26,9 @@ from subtask_opt.tour.solve import Result, SolverParams
 from subtask_opt.tour.solve import solve as solve_tour
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.model import Arm
     from subtask_opt.arm.tasks import SubtaskSet
     from subtask_opt.arm.timing.models import TimingResult
+    from subtask_opt.kinematics.planar import Arm
 
 CONFIGURATION_MODES = ("fixed", "optimize")
 DEFAULT_TIME_MODEL = "joint"
@@ -90,9 +90,9 @@ class PlanarProblem:
     _tour: MatrixProblem | ClusteredProblem = field(init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        from subtask_opt.arm.model import Arm
         from subtask_opt.arm.tasks import SubtaskSet
         from subtask_opt.arm.timing.models import travel_times
+        from subtask_opt.kinematics.planar import Arm
 
         if isinstance(self.arm, str):
             raise ParameterError(f"PlanarProblem.arm must be an Arm; got the name "

@@ -40,8 +40,8 @@ class Robot:
         name: the robot's name.
         planar: whether it is a planar 2R arm (points ``x, y`` as targets, the Cartesian
             time models available) rather than a serial arm (3-D pose targets).
-        model: the kinematic model (:class:`~subtask_opt.arm.model.Arm` for a planar
-            arm, :class:`~subtask_opt.arm.serial.SerialArm` otherwise).
+        model: the kinematic model (:class:`~subtask_opt.kinematics.planar.Arm` for a planar
+            arm, :class:`~subtask_opt.kinematics.serial.SerialArm` otherwise).
     """
 
     name: str
@@ -96,7 +96,7 @@ class Robot:
                                       "acceleration"),
             "jerk": per_joint(jerk, lim.jerk, accel_scale, "jerk"),
         }
-        from subtask_opt.arm.serial import load_serial_arm
+        from subtask_opt.kinematics.serial import load_serial_arm
 
         limits = {k: v.tolist() for k, v in values.items() if v is not None}
         loaded = {"name_or_path": arm.urdf_path, "tool_frame": arm.tool_frame,
@@ -117,10 +117,10 @@ def load_robot(name_or_path: str | Path, *, tool_frame: str | None = None,
         tool_offset: (serial arms) a fixed transform from ``tool_frame`` to the tool, a
             4x4 matrix or ``(xyz, rpy)`` (metres, radians).
         limits: (serial arms) a named limit set of the robot, or a mapping of per-joint
-            arrays (see :func:`~subtask_opt.arm.serial.load_serial_arm`).
+            arrays (see :func:`~subtask_opt.kinematics.serial.load_serial_arm`).
     """
-    from subtask_opt.arm.model import ROBOT_NAMES, load_planar_arm
-    from subtask_opt.arm.serial import SERIAL_ROBOT_NAMES, load_serial_arm
+    from subtask_opt.kinematics.planar import ROBOT_NAMES, load_planar_arm
+    from subtask_opt.kinematics.serial import SERIAL_ROBOT_NAMES, load_serial_arm
 
     text = str(name_or_path)
     planar = text in ROBOT_NAMES or (text not in SERIAL_ROBOT_NAMES
@@ -250,16 +250,16 @@ class ArmProblem:
             :class:`Joints` (radians); a serial arm's home is also a plain sequence of
             joint values (default the robot file's ``home_deg``); a planar arm's a plain
             *point* ``(x, y)`` (default: none, the tour starts at a subtask).
-        scene: (serial arms) a scene file or :class:`~subtask_opt.arm.scene.Scene`.
+        scene: (serial arms) a scene file or :class:`~subtask_opt.cell.scene.Scene`.
         time_model: ``joint`` (every robot); ``line``, ``trapezoid``, ``paper``
             (planar arms: Cartesian models).
         k, elbow, configurations, line_fallback, check_all_legs: planar options (see
             :class:`~subtask_opt.arm.planar_problem.PlanarProblem`).
         clearance: (serial arms) leg sweep resolution in metres.
         detours: (serial arms) plan legs in collision around the obstacles (OMPL,
-            :mod:`subtask_opt.arm.detour`); False forbids them.
+            :mod:`subtask_opt.cell.detour`); False forbids them.
         detour: (serial arms) the planner's budgets, a
-            :class:`~subtask_opt.arm.detour.DetourParams` (default: its defaults).
+            :class:`~subtask_opt.cell.detour.DetourParams` (default: its defaults).
         first: the target a planar closed tour starts at (default the first).
 
     Built on construction: IK, collision checks and leg times (``compiled``: the
@@ -333,8 +333,8 @@ class ArmProblem:
 
     def _serial(self) -> Any:
         from subtask_opt.arm.poses import PoseTargets
-        from subtask_opt.arm.scene import Scene
         from subtask_opt.arm.serial_problem import SerialProblem, default_home
+        from subtask_opt.cell.scene import Scene
 
         _check_targets(self.targets, PoseTargets, self.robot, "3-D (load_targets of an "
                        "x,y,z,... file)")

@@ -5,7 +5,7 @@ A :class:`SerialProblem` is built once: every IK solution of every target
 the matrix of joint-space leg times between all configurations and the home
 configuration (the joint model, phase-synchronised: every joint on the straight
 joint-space line, time-optimal under the velocity, acceleration and, where the arm has
-them, jerk limits, :func:`~subtask_opt.arm.timing.joint_legs.joint_leg_times`).
+them, jerk limits, :func:`~subtask_opt.kinematics.joint_moves.joint_leg_times`).
 :func:`solve_serial_problem` searches the order and one configuration per target
 together (a generalised TSP on the shared micro-GA core, decoded exactly by a
 layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
@@ -14,9 +14,9 @@ home -> targets -> home.
 Legs are checked for collisions lazily, as GLNS's lazy-edge search evaluates only the
 edges its best tour uses: the straight legs' times are lower bounds of every leg; every
 new best tour of the search has its legs not checked before swept
-(:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision` with the problem's
+(:meth:`~subtask_opt.cell.scene.CollisionChecker.leg_in_collision` with the problem's
 clearance); a leg in collision is planned around the obstacles
-(:func:`~subtask_opt.arm.detour.plan_detour`: OMPL's RRTConnect, simplified, timed
+(:func:`~subtask_opt.cell.detour.plan_detour`: OMPL's RRTConnect, simplified, timed
 through its waypoints) and its cost becomes the detour's time, or, when the planner fails
 or its budget (``DetourParams.max_plans`` per solve) is spent, or ``detours=False``, it is
 marked *infeasible* (a large finite penalty, so the GA avoids it). The GA evaluates its
@@ -27,7 +27,7 @@ takes much of the plan budget, the answers' legs are checked after each search i
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal profiles of the same straight lines with the arm's jerk limits
-(:func:`~subtask_opt.arm.timing.joint_legs.joint_move`), equal to the planned times to
+(:func:`~subtask_opt.kinematics.joint_moves.joint_move`), equal to the planned times to
 round-off.
 """
 
@@ -46,13 +46,6 @@ import numpy as np
 
 from subtask_opt._kernel_cache import compile_seconds
 from subtask_opt.arm.report import ArmReport, TourLeg
-from subtask_opt.arm.timing.joint_legs import (
-    JointLimits,
-    joint_leg_square,
-    joint_leg_times,
-    joint_limits,
-    ruckig_leg_time,
-)
 from subtask_opt.base.errors import (
     InputDataError,
     NoPathError,
@@ -63,16 +56,23 @@ from subtask_opt.base.errors import (
 )
 from subtask_opt.base.stop import Progress, StoppingCriterion, as_criteria, check_time_limit
 from subtask_opt.chromosomes import use
+from subtask_opt.kinematics.joint_moves import (
+    JointLimits,
+    joint_leg_square,
+    joint_leg_times,
+    joint_limits,
+    ruckig_leg_time,
+)
 from subtask_opt.tour import clustered as _gc
 from subtask_opt.tour.constraints import Canonical, TourConstraints
 from subtask_opt.tour.solve import Result
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.detour import Detour, DetourParams
-    from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import PoseTargets
-    from subtask_opt.arm.scene import CollisionChecker, Scene
-    from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.cell.detour import Detour, DetourParams
+    from subtask_opt.cell.scene import CollisionChecker, Scene
+    from subtask_opt.kinematics.ik import IKParams
+    from subtask_opt.kinematics.serial import SerialArm
     from subtask_opt.tour.solve import SolverParams
 
 _PROGRESS: contextvars.ContextVar[bool] = contextvars.ContextVar("serial_build_progress",
@@ -140,7 +140,7 @@ class SerialProblem:
 
     Attributes:
         targets: the pose targets (:func:`subtask_opt.arm.poses.load_targets`).
-        arm: the arm (:func:`subtask_opt.arm.serial.load_serial_arm`), with
+        arm: the arm (:func:`subtask_opt.kinematics.serial.load_serial_arm`), with
             acceleration limits.
         home: (n,) home configuration in radians; the tour starts and ends there.
         scene: boxes to avoid (None: self-collision only).
@@ -151,9 +151,9 @@ class SerialProblem:
         check_collisions: check configurations and legs at all.
         ik_seed: seed of the IK's random starts.
         detours: plan a leg in collision around the obstacles (False: forbid it).
-        detour: the planner's budgets (default :class:`~subtask_opt.arm.detour.DetourParams`).
+        detour: the planner's budgets (default :class:`~subtask_opt.cell.detour.DetourParams`).
 
-    A scene with a ``tool`` mounts it (:meth:`~subtask_opt.arm.scene.Tool.mount`): ``arm``
+    A scene with a ``tool`` mounts it (:meth:`~subtask_opt.cell.scene.Tool.mount`): ``arm``
     becomes the given arm with its tool frame at the tool's TCP, which then reaches the
     targets (the given arm's own tool frame is not used).
         legs_mode: ``"dense"`` the (M, M) leg matrix; ``"sparse"`` candidate legs only
@@ -221,9 +221,9 @@ class SerialProblem:
     _lock: threading.Lock = field(init=False, repr=False, default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
-        from subtask_opt.arm.ik import IKParams, IKSolver
         from subtask_opt.arm.poses import PoseTargets
-        from subtask_opt.arm.serial import SerialArm
+        from subtask_opt.kinematics.ik import IKParams, IKSolver
+        from subtask_opt.kinematics.serial import SerialArm
 
         if not isinstance(self.targets, PoseTargets):
             raise ParameterError(f"SerialProblem.targets must be PoseTargets, got "
@@ -232,7 +232,7 @@ class SerialProblem:
             raise ParameterError(f"SerialProblem.arm must be a SerialArm, got "
                                  f"{type(self.arm).__name__}")
         require_in_range("SerialProblem", "clearance", self.clearance, 1e-4, 1.0)
-        from subtask_opt.arm.detour import DetourParams
+        from subtask_opt.cell.detour import DetourParams
 
         if not isinstance(self.detours, bool):
             raise ParameterError(f"SerialProblem.detours must be a bool, got {self.detours!r}")
@@ -278,7 +278,7 @@ class SerialProblem:
         mode = _legs_mode(self, params)
         check_time_limit("before the IK")
         with _phase(cpu, "ik"), _ticker(f"IK of {len(self.targets)} targets"):
-            solutions = IKSolver(arm, params).solve_targets(self.targets, seed=self.ik_seed)
+            solutions = IKSolver(arm, params).solve_targets(self.targets.poses, seed=self.ik_seed)
         for i, q in enumerate(solutions.configurations):
             if q.shape[0] == 0:
                 point = np.round(self.targets.points[i], 6).tolist()
@@ -387,7 +387,7 @@ class SerialProblem:
 
 
 def _self_checker(arm: SerialArm) -> CollisionChecker:
-    from subtask_opt.arm.scene import CollisionChecker
+    from subtask_opt.cell.scene import CollisionChecker
 
     return CollisionChecker(arm)
 
@@ -1070,7 +1070,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
     from subtask_opt.tour.solve import PINNED_STALL, _relaxation_bound, _rotate
 
     n = problem.size
-    from subtask_opt.arm.detour import DetourParams, plan_detour
+    from subtask_opt.cell.detour import DetourParams, plan_detour
 
     cpu = dict(problem.cpu)
     cpu["search"] = 0.0
@@ -1489,7 +1489,7 @@ def default_home(arm: SerialArm) -> np.ndarray | None:
 
     path = arm.urdf_path.with_suffix(".json")
     if not path.is_file():
-        from subtask_opt.arm.serial import robots_dir
+        from subtask_opt.kinematics.serial import robots_dir
 
         path = robots_dir() / f"{arm.name}.json"
     try:

@@ -41,8 +41,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from subtask_opt.arm.timing.joint_legs import JointLimits, _leg_time
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.kinematics.joint_moves import JointLimits, _leg_time
 from subtask_opt.tour.sparse import SparseLegs
 
 SCORE_NEIGHBOURS = 4

@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm.model import Arm
 from subtask_opt.base.errors import InputDataError, ParameterError, require_int, require_positive
 from subtask_opt.base.files import parse_json, read_text
+from subtask_opt.kinematics.planar import Arm
 
 CASE_NAMES: tuple[str, ...] = ("square20", "random30")
 

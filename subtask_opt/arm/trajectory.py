@@ -7,7 +7,7 @@ last; open tours end at their last target), each a :class:`Leg` of
 
 * a joint move: ruckig's time-optimal synchronised profile, jerk-limited when the arm
   has jerk limits, as the ``joint`` model timed it
-  (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`): on a serial arm
+  (:func:`~subtask_opt.kinematics.joint_moves.joint_move`): on a serial arm
   phase-synchronised (the straight joint-space line its collision sweep checked), on a
   planar arm time-synchronised (each joint its own profile, all ending together);
 * (planar arms) a straight line: the time-optimal parameterisation of the line under the
@@ -41,10 +41,10 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm import _kinematics_kernels as _k
 from subtask_opt.arm.timing import _line_kernels as _lk
-from subtask_opt.arm.timing.joint_legs import joint_move
 from subtask_opt.base.errors import InputDataError, ParameterError, require_positive
+from subtask_opt.kinematics import _kernels as _k
+from subtask_opt.kinematics.joint_moves import joint_move
 
 # Relative slack of the validator on velocity and acceleration limits: the line
 # legs meet their limits exactly at the grid points of the path and to
@@ -144,8 +144,8 @@ class Limits:
 
 
 def arm_limits(arm: Any) -> Limits:
-    """The joint limits of a planar :class:`~subtask_opt.arm.model.Arm` or a
-    :class:`~subtask_opt.arm.serial.SerialArm` (which then needs acceleration limits)."""
+    """The joint limits of a planar :class:`~subtask_opt.kinematics.planar.Arm` or a
+    :class:`~subtask_opt.kinematics.serial.SerialArm` (which then needs acceleration limits)."""
     if hasattr(arm, "joint_limits"):
         lim = arm.joint_limits
         return Limits(lim.lower, lim.upper, lim.velocity, lim.acceleration, lim.jerk)
@@ -157,8 +157,8 @@ class Trajectory:
     """The time-parameterised joint trajectory of a tour, any robot.
 
     Attributes:
-        arm: the robot's model (a planar :class:`~subtask_opt.arm.model.Arm` or a
-            :class:`~subtask_opt.arm.serial.SerialArm`).
+        arm: the robot's model (a planar :class:`~subtask_opt.kinematics.planar.Arm` or a
+            :class:`~subtask_opt.kinematics.serial.SerialArm`).
         legs: the moves, in order.
         duration: total time (s).
         predicted_time: the tour time the search planned.
@@ -332,7 +332,7 @@ def from_serial_report(report: Any) -> Trajectory:
 
 def _chained_moves(waypoints: np.ndarray, lim: Limits) -> tuple[float, Callable[..., States]]:
     """Rest-to-rest phase-synchronised ruckig moves through ``waypoints`` (a detour, see
-    :mod:`subtask_opt.arm.detour`): the total duration and the states at leg times."""
+    :mod:`subtask_opt.cell.detour`): the total duration and the states at leg times."""
     moves = [joint_move(a, b, lim.velocity, lim.acceleration, lim.jerk)
              for a, b in zip(waypoints[:-1], waypoints[1:], strict=True)]
     starts = np.concatenate([[0.0], np.cumsum([m.duration for m in moves])])

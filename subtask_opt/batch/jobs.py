@@ -90,7 +90,7 @@ class Job:
             tool standoff (m), the sampling step about a tool axis (degrees) and the tool
             frame (see ``subtask-opt solve``).
         detours: (serial arms) plan legs whose straight joint motion collides around the
-            obstacles (:mod:`subtask_opt.arm.detour`); False forbids them (``solve
+            obstacles (:mod:`subtask_opt.cell.detour`); False forbids them (``solve
             --no-detours``, ``batch --no-detours``).
 
     A serial arm's job (a robot that is not a planar 2R arm) takes a target file and the
@@ -184,8 +184,8 @@ class Job:
     @property
     def serial(self) -> bool:
         """Whether the robot is a serial arm (not a planar 2R arm)."""
-        from subtask_opt.arm.model import ROBOT_NAMES
         from subtask_opt.arm.problem import movable_joints
+        from subtask_opt.kinematics.planar import ROBOT_NAMES
 
         if self.robot in ROBOT_NAMES:
             return False
@@ -318,8 +318,8 @@ def _error_text(exc: BaseException) -> str:
 
 def _run_task(task: _Task, *, stop: Any, params: SolverParams | None) -> JobResult:
     """Solve one task in a worker; every exception becomes a failed JobResult."""
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import builtin_case
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     start = time.perf_counter()
     try:
@@ -385,9 +385,9 @@ def warm_up(kinds: tuple[tuple[str, str], ...] = (("trapezoid", "fixed"),)) -> N
     from subtask_opt._kernel_cache import announce_if_empty
 
     announce_if_empty("the kernels this batch needs")
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import random_subtasks
     from subtask_opt.base.stop import MaxGenerations
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     arm = load_planar_arm("planar_2r")
     subtasks = random_subtasks(arm, WARM_SUBTASKS, seed=0)

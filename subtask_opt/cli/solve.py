@@ -438,7 +438,7 @@ def add_cell_options(g: Any) -> None:
     g.add_argument("--scene", metavar="SCENE.json|MESH.stl", default=None,
                    help='the cell: {"boxes": [...], "meshes": [{"name", "file", "scale", '
                         '"position", "rotation"}], "tool": {"frame", "tcp", "boxes", '
-                        '"meshes"}} (subtask_opt.arm.scene), or one mesh file at the origin')
+                        '"meshes"}} (subtask_opt.cell.scene), or one mesh file at the origin')
     g.add_argument("--standoff", type=float_in(-1.0, 1.0), default=None, metavar="M",
                    help="tool standoff along its axis in metres (default 0)")
     g.add_argument("--axis-step", type=float_in(5.0, 360.0), default=None,

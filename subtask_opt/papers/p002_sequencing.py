@@ -57,8 +57,8 @@ def run(out: Path, *, quick: bool = False, seed: int = 0,
         map_runs: Any = None) -> tuple[list[Row], list[Path]]:
     """Both experiments from ``5`` (quick) or ``20`` seeds; figures into ``out``."""
     from subtask_opt import SolverParams, builtin_case, solve
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.kinematics.planar import load_planar_arm
     from subtask_opt.plotting.sequencing import save_solution_figure
     from subtask_opt.tour.exact import milp_optimum
 

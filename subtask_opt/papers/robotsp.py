@@ -16,7 +16,7 @@ per subset (IK, collision filter, leg matrix) is shared by every method:
 * ``robotsp_planned``: RoboTSP's whole pipeline, "plan every leg after sequencing"
   (:func:`plan_after`): RoboTSP's tour, then each of its straight legs that collides
   planned once with the same planner ours uses (OMPL RRTConnect + simplification,
-  :func:`~subtask_opt.arm.detour.plan_detour`, for RoboTSP's BiRRT + shortcutting).
+  :func:`~subtask_opt.cell.detour.plan_detour`, for RoboTSP's BiRRT + shortcutting).
 
 The three peers come from :mod:`subtask_opt.tour.peers` (imported lazily; a
 missing module or function is reported, not faked). Every answer is executed
@@ -87,7 +87,7 @@ def plan_after(problem: Any, report: Any, *, seed: int = 0, params: Any = None,
     """RoboTSP's last step on a sequenced tour (``report``, an
     :func:`~subtask_opt.arm.serial_problem.evaluate_tour` answer): every leg whose straight
     joint motion collides is planned once around the obstacles
-    (:func:`~subtask_opt.arm.detour.plan_detour`, one attempt, ``params`` its budgets) and
+    (:func:`~subtask_opt.cell.detour.plan_detour`, one attempt, ``params`` its budgets) and
     driven through its waypoints; the order and configurations stay. A leg the planner
     cannot plan stays straight (and in collision: ``counts["legs_unplanned"]``).
 
@@ -96,7 +96,7 @@ def plan_after(problem: Any, report: Any, *, seed: int = 0, params: Any = None,
     """
     import dataclasses
 
-    from subtask_opt.arm.detour import plan_detour
+    from subtask_opt.cell.detour import plan_detour
 
     if problem.checker is None:
         raise ParameterError("plan_after: the problem has no collision checker")
@@ -152,18 +152,18 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
 
     ``peer_functions`` replaces peers by name (same contract as :mod:`subtask_opt.tour.peers`).
     """
-    from subtask_opt.arm.ik import IKParams
     from subtask_opt.arm.poses import make_targets
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import load_serial_arm
     from subtask_opt.arm.serial_problem import (
         MAX_KICKS,
         SerialProblem,
         evaluate_tour,
         solve_serial_problem,
     )
-    from subtask_opt.arm.timing.joint_legs import joint_leg_times
     from subtask_opt.arm.trajectory import from_serial_report, validate
+    from subtask_opt.cell.scene import Scene
+    from subtask_opt.kinematics.ik import IKParams
+    from subtask_opt.kinematics.joint_moves import joint_leg_times
+    from subtask_opt.kinematics.serial import load_serial_arm
     from subtask_opt.tour.solve import SolverParams
 
     stop: list[StoppingCriterion] | None = None

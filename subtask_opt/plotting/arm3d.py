@@ -17,7 +17,7 @@ library, no CDN, no server). The page shows:
   (simplified above ``max_triangles``, :mod:`subtask_opt.plotting.cell_geometry`);
 * the scene's tool (its boxes and meshes, orange) on the frame it is mounted on, moving
   with the arm;
-* detoured legs (planned around an obstacle, :mod:`subtask_opt.arm.detour`): their part
+* detoured legs (planned around an obstacle, :mod:`subtask_opt.cell.detour`): their part
   of the tool path in purple, the TCP at each waypoint a purple square;
 * a ground grid (0.1 m) at z = 0 and the base frame's x/y/z axes.
 
@@ -61,8 +61,8 @@ from subtask_opt.plotting.cell_geometry import (
 )
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.cell.scene import Scene
+    from subtask_opt.kinematics.serial import SerialArm
 
 MAX_FRAMES = 2000
 """Default largest number of animation frames written into one page."""
@@ -142,8 +142,8 @@ def tour_view_data(arm: SerialArm, times: Any, q: Any, *, targets: Any = None, a
                    max_frames: int = MAX_FRAMES, detours: Any = None,
                    max_triangles: int = VIEW_TRIANGLES) -> dict[str, Any]:
     """The JSON document :func:`write_tour_html` embeds (validated; see its arguments)."""
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.cell.scene import Scene
+    from subtask_opt.kinematics.serial import SerialArm
 
     if not isinstance(arm, SerialArm):
         raise ParameterError(f"write_tour_html: arm must be a SerialArm, got {type(arm).__name__}")
@@ -228,13 +228,13 @@ def write_tour_html(path: str | Path, arm: SerialArm, times: Any, q: Any, *,
 
     Args:
         path: the HTML file to write (parent folders are created).
-        arm: the arm (:func:`~subtask_opt.arm.serial.load_serial_arm`).
+        arm: the arm (:func:`~subtask_opt.kinematics.serial.load_serial_arm`).
         times: (T,) non-decreasing times (s).
         q: (T, nq) joint positions (rad, m) at those times.
         targets: optional (N, 3) target positions (m, base frame), drawn numbered:
             by index, or by visit (1 = first) when ``order`` is given.
         axes: optional (N, 3) tool axes at the targets (drawn as short lines).
-        scene: optional :class:`~subtask_opt.arm.scene.Scene`: its boxes and meshes are
+        scene: optional :class:`~subtask_opt.cell.scene.Scene`: its boxes and meshes are
             drawn, and its tool's parts on the frame they are mounted on, moving with the arm.
         title: the page's heading (default: robot and target count).
         order: optional (N,) target indices in visiting order (labels the targets).

@@ -3,7 +3,7 @@ the frame it is mounted on, and the detoured legs of a trajectory.
 
 The HTML view (:mod:`subtask_opt.plotting.arm3d`) and the matplotlib figure
 (:mod:`subtask_opt.plotting.serial`) draw the same geometry. A mesh may hold up to
-:data:`~subtask_opt.arm.meshes.MAX_MESH_TRIANGLES` triangles, more than a page's painter or
+:data:`~subtask_opt.cell.meshes.MAX_MESH_TRIANGLES` triangles, more than a page's painter or
 matplotlib draws at a usable speed, so a figure draws at most ``most`` triangles of each
 mesh: :func:`simplified` merges the vertices that fall in one cell of a regular grid (vertex
 clustering), the cell growing until few enough triangles are left. The picture then
@@ -21,8 +21,8 @@ import numpy as np
 from subtask_opt.base.errors import ParameterError, require_int
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.cell.scene import Scene
+    from subtask_opt.kinematics.serial import SerialArm
 
 VIEW_TRIANGLES = 20_000
 """Most triangles the figures draw of all the meshes of a scene and its tool together."""
@@ -78,7 +78,7 @@ def simplified(vertices: Any, triangles: Any, most: int) -> tuple[np.ndarray, np
 
 
 def _box_surface(box: Any) -> Surface:
-    from subtask_opt.arm.meshes import box_triangles
+    from subtask_opt.cell.meshes import box_triangles
 
     corners, tris = box_triangles(box.half_extents)
     return Surface(box.name, corners @ box.rotation.T + box.center, tris)
@@ -138,7 +138,7 @@ def frame_poses(arm: SerialArm, q: np.ndarray, frame: str) -> np.ndarray:
 class DetourLeg:
     """A detoured leg of a trajectory: leg ``index`` (0: from the home) runs from ``start``
     to ``end`` (s) straight in joint space through the corners ``waypoints`` ((k, n), its
-    ends first and last), stopping at each (:mod:`subtask_opt.arm.detour`)."""
+    ends first and last), stopping at each (:mod:`subtask_opt.cell.detour`)."""
 
     index: int
     start: float

@@ -28,14 +28,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from subtask_opt.arm import _kinematics_kernels as _k
+from subtask_opt.kinematics import _kernels as _k
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from subtask_opt.arm.model import Arm
     from subtask_opt.arm.planar_problem import PlanarProblem
+    from subtask_opt.kinematics.planar import Arm
     from subtask_opt.tour.solve import Result
 
 # Tours with more subtasks than this list their order in a side table instead of

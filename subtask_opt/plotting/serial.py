@@ -20,8 +20,8 @@ from subtask_opt.plotting.cell_geometry import (
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from subtask_opt.arm.scene import Scene
-    from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.cell.scene import Scene
+    from subtask_opt.kinematics.serial import SerialArm
 
 MAX_NUMBERED = 60
 """Above this many targets only every k-th visit is numbered in the plane view."""
@@ -234,7 +234,7 @@ def plot_serial_tour(arm: SerialArm, targets: Any, tool_path: Any, leg_times: An
         path: the image file (PNG, PDF, SVG by extension); folders are created.
         title: the figure's title, saying what was run.
         q_home: optional (n,) home configuration: the arm's links are drawn there.
-        scene: optional :class:`~subtask_opt.arm.scene.Scene`: its box edges and meshes
+        scene: optional :class:`~subtask_opt.cell.scene.Scene`: its box edges and meshes
             are drawn (meshes simplified above :data:`FIGURE_TRIANGLES`), and its tool on
             the arm at home.
         detours: optional detoured legs

@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from subtask_opt.arm._kinematics_kernels import fk_batch
 from subtask_opt.base.errors import InputDataError, require_int, require_positive
 from subtask_opt.base.progress import progress_bar
+from subtask_opt.kinematics._kernels import fk_batch
 from subtask_opt.plotting.sequencing import plot_workspace
 
 if TYPE_CHECKING:

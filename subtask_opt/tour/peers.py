@@ -45,7 +45,7 @@ from subtask_opt.base.errors import (
 )
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.serial import SerialArm
+    from subtask_opt.kinematics.serial import SerialArm
 
 LegTime = Callable[[np.ndarray, np.ndarray], np.ndarray]
 """``leg_time(QA (a, n), QB (b, n)) -> (a, b)`` leg times (s) from each row of QA to each of QB."""

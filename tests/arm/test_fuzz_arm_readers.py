@@ -135,7 +135,7 @@ _PLANAR = json.loads((ROBOTS / "planar_2r.json").read_text())
 
 
 def _check_planar_limits(data: bytes) -> None:
-    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     def setup(tmp: Path) -> None:
         (tmp / "arm.urdf").write_text((ROBOTS / "planar_2r.urdf").read_text())
@@ -166,7 +166,7 @@ _SERIAL = json.loads((ROBOTS / "vs060_drill.json").read_text())
 
 
 def _check_serial_params(data: bytes) -> None:
-    from subtask_opt.arm.serial import load_serial_arm
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     def setup(tmp: Path) -> None:
         shutil.copy(str(ROBOTS / "vs060_drill.urdf"), tmp / "arm.urdf")
@@ -198,7 +198,7 @@ _TARGETS = {"targets": [{"position": [0.5, 0.1, 0.4], "axis": [1, 0, 0]},
 
 
 def _check_scene(data: bytes) -> None:
-    from subtask_opt.arm.scene import Scene
+    from subtask_opt.cell.scene import Scene
 
     _reads_or_refuses(Scene.load, data, "scene.json")
 
@@ -240,7 +240,7 @@ def test_fuzz_target_files(data, suffix):
 def test_the_valid_files_read():
     # the mutations start from files that do read: a refusal is the mutation's doing
     from subtask_opt.arm.poses import load_targets
-    from subtask_opt.arm.scene import Scene
+    from subtask_opt.cell.scene import Scene
 
     with tempfile.TemporaryDirectory() as tmp:
         (Path(tmp) / "s.json").write_text(json.dumps(_SCENE))

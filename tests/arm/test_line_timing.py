@@ -14,11 +14,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.model import CartesianLimits, JointLimits, load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE, travel_times
 from subtask_opt.base.errors import NoPathError, ParameterError
+from subtask_opt.kinematics.planar import CartesianLimits, JointLimits, load_planar_arm
 from tests.conftest import REDUCED, examples, size
 
 _ARMS: dict = {}

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from subtask_opt import MaxGenerations, NoImprovement, SolverParams, TargetCost, builtin_case, solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.exact import held_karp, milp_optimum
 from subtask_opt.tour.problem import MatrixProblem
 from subtask_opt.tour.solve import CONFIGURED_RUNS, proven_configured_optimum

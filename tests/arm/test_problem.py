@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 import subtask_opt as so
-from subtask_opt.arm.timing.joint_legs import joint_leg_times
 from subtask_opt.arm.trajectory import HOME as AT_HOME
 from subtask_opt.cli import main
+from subtask_opt.kinematics.joint_moves import joint_leg_times
 
 DATA = Path(__file__).resolve().parents[2] / "examples" / "data"
 CASE = DATA / "ur5_panel.csv"

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from subtask_opt.arm.poses import make_targets
-from subtask_opt.arm.scene import Scene
-from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
 from subtask_opt.arm.trajectory import from_serial_report, validate
 from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
+from subtask_opt.cell.scene import Scene
+from subtask_opt.kinematics.serial import load_serial_arm
 from tests.conftest import size
 
 HOME = np.radians([0, -90, 90, -90, -90, 0])
@@ -246,12 +246,12 @@ def test_cpu_split_reports_compilation_apart(solved) -> None:
 def test_the_planned_leg_time_is_the_executed_one_with_jerk_limits() -> None:
     """The joint model the search optimises is ruckig's jerk-limited time-synchronised
     move (the Panda has jerk limits), not a trapezoid that ignores them."""
-    from subtask_opt.arm.serial import load_serial_arm
-    from subtask_opt.arm.timing.joint_legs import (
+    from subtask_opt.kinematics.joint_moves import (
         joint_leg_times,
         joint_limits,
         ruckig_leg_time,
     )
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     arm = load_serial_arm("panda")
     lim = arm.limits
@@ -277,8 +277,8 @@ def test_executed_joint_moves_take_the_planned_time(phase: bool) -> None:
     jerk: phase-synchronised (serial arms) it is the straight line and takes
     joint_leg_times; time-synchronised (planar arms) it takes the slowest joint's own time
     and never longer; either way every joint goes monotonically from start to goal."""
-    from subtask_opt.arm._kinematics_kernels import scurve_time_nb, trapezoid_time_nb
-    from subtask_opt.arm.timing.joint_legs import joint_leg_times, joint_limits, joint_move
+    from subtask_opt.kinematics._kernels import scurve_time_nb, trapezoid_time_nb
+    from subtask_opt.kinematics.joint_moves import joint_leg_times, joint_limits, joint_move
 
     rng = np.random.default_rng(5)
     for k in range(60):

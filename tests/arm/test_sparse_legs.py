@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from subtask_opt.arm import sparse_legs as sl
-from subtask_opt.arm.ik import IKParams, IKSolver
 from subtask_opt.arm.panel import wing_panel
 from subtask_opt.arm.poses import make_targets
-from subtask_opt.arm.serial import load_serial_arm
-from subtask_opt.arm.timing.joint_legs import joint_leg_square, joint_leg_times, joint_limits
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.kinematics.ik import IKParams, IKSolver
+from subtask_opt.kinematics.joint_moves import joint_leg_square, joint_leg_times, joint_limits
+from subtask_opt.kinematics.serial import load_serial_arm
 from subtask_opt.tour.exact import clustered_held_karp
 
 HOME = np.radians([0.0, -60.0, 90.0, -30.0, 90.0, 0.0])
@@ -33,7 +33,7 @@ def _limits(arm):
 def _solutions(arm, n, seed, wrap=False, rows=None):
     rows = wing_panel(n, seed=seed) if rows is None else rows
     targets = make_targets(rows, axis_step=90.0, standoff=0.01)
-    sol = IKSolver(arm, IKParams(wrap_alternatives=wrap)).solve_targets(targets)
+    sol = IKSolver(arm, IKParams(wrap_alternatives=wrap)).solve_targets(targets.poses)
     flat = np.vstack(sol.configurations)
     off = np.concatenate([[0], np.cumsum(sol.counts)]).astype(np.int64)
     points = np.array([p[0, :3, 3] for p in targets.poses])

@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.model import ROBOT_NAMES, Arm, load_planar_arm
 from subtask_opt.arm.tasks import (
     CASE_NAMES,
     SubtaskSet,
@@ -20,6 +19,7 @@ from subtask_opt.arm.tasks import (
     save_subtasks,
 )
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.kinematics.planar import ROBOT_NAMES, Arm, load_planar_arm
 from tests.conftest import size
 
 PTS = np.array([[0.1, 0.2], [0.3, -0.1], [0.25, 0.05], [0.15, 0.12]])

@@ -12,7 +12,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-from subtask_opt.arm.model import ROBOT_NAMES, Arm, CartesianLimits, JointLimits, load_planar_arm
 from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
 from subtask_opt.arm.timing.models import (
     MOVE_LINE,
@@ -23,6 +22,13 @@ from subtask_opt.arm.timing.models import (
     travel_times,
 )
 from subtask_opt.base.errors import ParameterError, UnreachableError
+from subtask_opt.kinematics.planar import (
+    ROBOT_NAMES,
+    Arm,
+    CartesianLimits,
+    JointLimits,
+    load_planar_arm,
+)
 from tests.conftest import examples, size
 
 

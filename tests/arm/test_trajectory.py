@@ -9,11 +9,11 @@ matplotlib.use("Agg")
 import numpy as np
 import pytest
 
-from subtask_opt.arm.model import JointLimits, load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
 from subtask_opt.arm.trajectory import HOME, Trajectory, build_trajectory, validate
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.kinematics.planar import JointLimits, load_planar_arm
 from subtask_opt.tour.problem import MatrixProblem
 from tests.conftest import REDUCED, size
 

@@ -828,9 +828,9 @@ def preload() -> None:
     import matplotlib.pyplot  # noqa: F401
 
     import subtask_opt  # noqa: F401
-    import subtask_opt.arm.serial  # noqa: F401
     import subtask_opt.batch  # noqa: F401
     import subtask_opt.cli  # noqa: F401
+    import subtask_opt.kinematics.serial  # noqa: F401
     import subtask_opt.planners.agv.scenarios  # noqa: F401
     import subtask_opt.planners.grid.world  # noqa: F401
     import subtask_opt.planners.polygon.world  # noqa: F401

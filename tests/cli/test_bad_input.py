@@ -125,9 +125,9 @@ def test_api_numbers_given_as_strings(part):
 
 def test_api_solve_with_params_as_a_name(part):
     from subtask_opt import solve
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.planar_problem import PlanarProblem
     from subtask_opt.arm.tasks import load_subtasks
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     problem = PlanarProblem(load_subtasks(part), load_planar_arm("planar_2r"))
     with pytest.raises(SubtaskOptError, match="params"):
@@ -135,9 +135,9 @@ def test_api_solve_with_params_as_a_name(part):
 
 
 def test_api_problem_with_the_arm_as_a_name(part):
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.planar_problem import PlanarProblem
     from subtask_opt.arm.tasks import load_subtasks
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     subtasks = load_subtasks(part)
     try:
@@ -325,7 +325,7 @@ def test_obstacle_vertex_touching_the_boundary_closes_the_gap(planner, tmp_path,
 
 
 def test_arm_fk_from_eight_threads():
-    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     arm = load_planar_arm("planar_2r")
     qs = np.random.default_rng(5).uniform(-2.5, 2.5, size=(2000, 2))

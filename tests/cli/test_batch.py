@@ -7,12 +7,12 @@ import json
 import pytest
 
 from subtask_opt import solve
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem
 from subtask_opt.arm.tasks import builtin_case, random_subtasks, save_subtasks
 from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.batch.pool import dask_available
 from subtask_opt.cli.app import main
+from subtask_opt.kinematics.planar import load_planar_arm
 
 GENERATIONS = 30
 

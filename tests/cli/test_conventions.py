@@ -11,8 +11,8 @@ import json
 
 import pytest
 
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.cli import main
+from subtask_opt.kinematics.planar import load_planar_arm
 
 SEEDED = [
     ["solve", "--case", "square20"],

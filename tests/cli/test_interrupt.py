@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.tasks import random_subtasks, save_subtasks
+from subtask_opt.kinematics.planar import load_planar_arm
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.tasks import builtin_case
 from subtask_opt.cli.app import main
+from subtask_opt.kinematics.planar import load_planar_arm
 from tests.conftest import REDUCED
 
 

@@ -132,7 +132,8 @@ def test_serial_output_flags_refused_in_one_line(files, capsys, flag, value) -> 
 def test_legs_that_do_not_fit_in_memory_are_refused_before_any_ik(files, capsys,
                                                                  monkeypatch) -> None:
     """The one size limit is memory, checked before the IK starts: one line, exit 2."""
-    from subtask_opt.arm import ik, sparse_legs
+    from subtask_opt.arm import sparse_legs
+    from subtask_opt.kinematics import ik
 
     monkeypatch.setattr(sparse_legs, "available_memory", lambda: 1000)
 

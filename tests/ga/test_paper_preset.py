@@ -317,7 +317,7 @@ def _check_cut_excluded_resolves(m, found, tours):
 @pytest.fixture(scope="module")
 def square20_paper_matrix():
     from subtask_opt import builtin_case
-    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     arm = load_planar_arm("planar_2r")
     return PlanarProblem(builtin_case("square20", arm), arm, time_model="paper").matrix
@@ -342,7 +342,7 @@ def test_optimal_tours_figure_has_a_labelled_panel_per_tour(tmp_path, square20_p
     import matplotlib.pyplot as plt
 
     from subtask_opt import builtin_case
-    from subtask_opt.arm.model import load_planar_arm
+    from subtask_opt.kinematics.planar import load_planar_arm
     from subtask_opt.plotting.sequencing import optimal_tours_figure, save_optimal_tours_figure
 
     arm = load_planar_arm("planar_2r")

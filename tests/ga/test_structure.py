@@ -16,11 +16,13 @@ from subtask_opt.ga.kinds import TAGS, Kind
 
 PACKAGE = Path(subtask_opt.__file__).parent
 GA_DIR = PACKAGE / "ga"
-ABOVE_GA = ("subtask_opt.tour", "subtask_opt.chromosomes", "subtask_opt.arm",
+ABOVE_GA = ("subtask_opt.tour", "subtask_opt.chromosomes", "subtask_opt.kinematics",
+            "subtask_opt.cell", "subtask_opt.arm",
             "subtask_opt.planners", "subtask_opt.plotting", "subtask_opt.cli",
             "subtask_opt.batch", "subtask_opt.papers")
-LAYERS = {"base": 0, "_kernel_cache": 0, "ga": 1, "chromosomes": 2, "tour": 3, "arm": 4,
-          "planners": 4, "plotting": 5, "batch": 6, "papers": 6, "cli": 7}
+LAYERS = {"base": 0, "_kernel_cache": 0, "ga": 1, "chromosomes": 2, "tour": 3,
+          "kinematics": 4, "planners": 4, "cell": 5, "arm": 6, "plotting": 7, "batch": 8,
+          "papers": 8, "cli": 9}
 """The package's layers: a module may import from its own layer or a lower one only
 (``chromosomes`` is the composition root of the GA's kinds; it imports its kinds' modules
 lazily, when a caller asks for one)."""

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.scene import Box, Scene
-from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.cell.scene import Box, Scene
+from subtask_opt.kinematics.serial import load_serial_arm
 from subtask_opt.plotting.arm3d import (
     LINK_COLOUR,
     frame_indices,

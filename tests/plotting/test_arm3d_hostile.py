@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.meshes import Mesh, box_triangles, write_stl
-from subtask_opt.arm.scene import Box, Scene
-from subtask_opt.arm.serial import example_robot_data_share, load_serial_arm
+from subtask_opt.cell.meshes import Mesh, box_triangles, write_stl
+from subtask_opt.cell.scene import Box, Scene
+from subtask_opt.kinematics.serial import example_robot_data_share, load_serial_arm
 from subtask_opt.plotting import arm3d
 from subtask_opt.plotting.arm3d import script_json, tour_view_data, write_tour_html
 from tests.plotting.test_arm3d import _chromium, _status, needs_chromium

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.meshes import Mesh, box_triangles, write_stl
-from subtask_opt.arm.scene import Box, Scene, Tool
-from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.cell.meshes import Mesh, box_triangles, write_stl
+from subtask_opt.cell.scene import Box, Scene, Tool
+from subtask_opt.kinematics.serial import load_serial_arm
 from subtask_opt.plotting.arm3d import tour_view_data, write_tour_html
 from subtask_opt.plotting.cell_geometry import DetourLeg, detour_legs, simplified
 from tests.plotting.test_arm3d import _chromium, _embedded, _status, needs_chromium

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from subtask_opt.arm.scene import Box, Scene
-from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.cell.scene import Box, Scene
+from subtask_opt.kinematics.serial import load_serial_arm
 from subtask_opt.plotting.serial import plot_serial_tour, serial_tour_figure
 
 HOME = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0])

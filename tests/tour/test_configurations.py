@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.model import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
 from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.chromosomes import use
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.tour.configurations import best_configurations, induced_matrix, pack_data
 from subtask_opt.tour.solve import SolverParams
 from tests.conftest import size

@@ -244,8 +244,8 @@ def test_the_open_path_transform_costs_exactly_the_path() -> None:
 
 @pytest.fixture(scope="module")
 def arm_problem():
-    from subtask_opt.arm.model import load_planar_arm
     from subtask_opt.arm.tasks import random_subtasks
+    from subtask_opt.kinematics.planar import load_planar_arm
 
     arm = load_planar_arm("planar_2r")
     subtasks = random_subtasks(arm, 7, seed=3)

@@ -298,7 +298,7 @@ def test_peers_on_one_to_three_targets_equal_brute_force(n):
 
 
 def test_manipulability_zero_at_a_singularity():
-    from subtask_opt.arm.serial import load_serial_arm
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     arm = load_serial_arm("ur5")
     q = np.array([[0.0, -1.2, 1.4, -1.0, 1.2, 0.3],   # generic

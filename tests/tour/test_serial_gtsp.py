@@ -9,14 +9,14 @@ import math
 import numpy as np
 import pytest
 
-from subtask_opt.arm.timing.joint_legs import (
+from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.chromosomes import use
+from subtask_opt.kinematics.joint_moves import (
     joint_leg_square,
     joint_leg_times,
     joint_limits,
     ruckig_leg_time,
 )
-from subtask_opt.base.errors import InputDataError, ParameterError
-from subtask_opt.chromosomes import use
 from subtask_opt.tour import clustered as gc
 from subtask_opt.tour.configurations import pack_layers
 from subtask_opt.tour.permutation import make_aux, neighbour_table

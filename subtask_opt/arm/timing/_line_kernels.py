@@ -54,7 +54,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.arm._kinematics_kernels import TWO_PI, ik_point, ik_values, unit_direction
+from subtask_opt.kinematics._kernels import TWO_PI, ik_point, ik_values, unit_direction
 
 LINE_OK, LINE_ANNULUS, LINE_JOINT_LIMIT, LINE_SINGULAR = 0, 1, 2, 3
 # |sin(elbow angle)| below this is a singular configuration (the rim or the inner disc).

@@ -51,8 +51,6 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm import _kinematics_kernels as _k
-from subtask_opt.arm.model import BRANCH_NAMES, Arm
 from subtask_opt.arm.tasks import SubtaskSet
 from subtask_opt.arm.timing import _line_kernels as _lk
 from subtask_opt.base.errors import (
@@ -63,6 +61,8 @@ from subtask_opt.base.errors import (
     require_non_negative,
     require_positive,
 )
+from subtask_opt.kinematics import _kernels as _k
+from subtask_opt.kinematics.planar import BRANCH_NAMES, Arm
 from subtask_opt.tour.configurations import gather
 
 TIME_MODELS: tuple[str, ...] = ("paper", "trapezoid", "joint", "line")
@@ -82,7 +82,7 @@ def trapezoid_time(distance: float, vmax: float, amax: float) -> float:
     """Exact minimum rest-to-rest time over ``distance`` with speed/acceleration limits.
 
     ``d/v + v/a`` if ``d >= v**2/a`` (trapezoid), else ``2 sqrt(d/a)`` (triangle).
-    The numba version is :func:`subtask_opt.arm._kinematics_kernels.trapezoid_time_nb`.
+    The numba version is :func:`subtask_opt.kinematics._kernels.trapezoid_time_nb`.
     """
     require_non_negative("trapezoid_time", "distance", distance)
     require_positive("trapezoid_time", "vmax", vmax)
@@ -95,7 +95,7 @@ def scurve_time(distance: float, vmax: float, amax: float, jmax: float) -> float
 
     Cases: cruise at vmax if the distance allows, else a lower peak speed; the
     acceleration phases reach amax only when the jerk allows. The numba
-    version is :func:`subtask_opt.arm._kinematics_kernels.scurve_time_nb`.
+    version is :func:`subtask_opt.kinematics._kernels.scurve_time_nb`.
     """
     require_non_negative("scurve_time", "distance", distance)
     require_positive("scurve_time", "vmax", vmax)

@@ -40,9 +40,9 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm.limit_arrays import freeze_limit_arrays
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.base.files import check_input_file, parse_json, read_text
+from subtask_opt.kinematics.limit_arrays import freeze_limit_arrays
 
 SERIAL_ROBOT_NAMES: tuple[str, ...] = ("ur3", "ur5", "ur10", "panda", "vs060_drill")
 

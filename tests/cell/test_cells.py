@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.meshes import box_triangles, write_stl
-from subtask_opt.arm.scene import Scene
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.cell.meshes import box_triangles, write_stl
+from subtask_opt.cell.scene import Scene
 
 HOME = np.radians([0.0, -100.0, 100.0, -90.0, -90.0, 0.0])
 TCP = 0.15
@@ -69,8 +69,8 @@ def cell(tmp_path_factory):
 @pytest.fixture(scope="module")
 def solved(cell):
     import subtask_opt as so
-    from subtask_opt.arm.detour import DetourParams
     from subtask_opt.arm.problem import ArmProblem, load_robot, load_targets
+    from subtask_opt.cell.detour import DetourParams
 
     robot = load_robot("ur5")
     # the acceptance cell, solved with and without detours (about 8 s in all: the planner
@@ -202,7 +202,7 @@ def test_a_scene_tool_refuses_a_tool_frame_and_an_unknown_frame(cell, tmp_path) 
 # ------------------------------------------------------------------ the cell, solved
 
 def _tool0(q: np.ndarray) -> np.ndarray:
-    from subtask_opt.arm.serial import load_serial_arm
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     return load_serial_arm("ur5", tool_frame="tool0").fk(q)
 
@@ -236,7 +236,7 @@ def test_the_written_trajectory_stays_clear_by_coal_directly(solved, cell) -> No
     import pinocchio as pin
 
     import subtask_opt as so
-    from subtask_opt.arm.serial import load_serial_arm
+    from subtask_opt.kinematics.serial import load_serial_arm
 
     problem, result = solved[True]
     trajectory = so.trajectory(result)
@@ -331,7 +331,7 @@ def test_plan_after_sequencing_plans_exactly_the_colliding_straight_legs(solved,
 
 
 def test_curved_sheet_is_closed_and_on_its_parabola(tmp_path) -> None:
-    from subtask_opt.arm.meshes import Mesh, curved_sheet
+    from subtask_opt.cell.meshes import Mesh, curved_sheet
 
     v, t = curved_sheet((0.5, 0.1, 0.05), (0.3, 0.6), 0.6, thickness=0.004, divisions=(5, 7))
     edges: dict[tuple[int, int], int] = {}
@@ -353,7 +353,7 @@ _SUBPROCESS_SOLVE = """
 import json, sys
 import numpy as np
 import subtask_opt as so
-from subtask_opt.arm.detour import DetourParams
+from subtask_opt.cell.detour import DetourParams
 from subtask_opt.arm.problem import ArmProblem, load_robot, load_targets
 cell, holes = sys.argv[1], sys.argv[2]
 targets = load_targets(holes, standoff=0.05, axis_step=45.0)

@@ -1,10 +1,10 @@
 """Numba kernels of the planar 2R arm: kinematics, 1-DOF profile times, time matrices.
 
-Arrays and scalars in, arrays out; the Python wrappers in :mod:`subtask_opt.arm.model`
+Arrays and scalars in, arrays out; the Python wrappers in :mod:`subtask_opt.kinematics.planar`
 and :mod:`subtask_opt.arm.timing.models` validate the inputs and unpack the objects.
 
 The arm enters every kernel as ``kin``, the :class:`ArmKinematics` named tuple
-built by :attr:`subtask_opt.arm.model.Arm.kinematics` (numba caches it by its field types).
+built by :attr:`subtask_opt.kinematics.planar.Arm.kinematics` (numba caches it by its field types).
 With the geometric angles ``t1 = a1 + s1*q1`` (upper arm direction) and
 ``b = a2 + s2*q2`` (elbow angle, upper arm to forearm), the tip is::
 

@@ -8,14 +8,14 @@ are synchronised is the one choice, and it follows from what can be hit:
 * ``phase`` (serial arms, whose cells and links are collision-checked): every joint
   follows the same time profile s(t) from 0 to 1 scaled by its distance ``d_j``, so the
   move is the straight joint-space line the collision sweep checks
-  (:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision`); s may move at most
+  (:meth:`~subtask_opt.cell.scene.CollisionChecker.leg_in_collision`); s may move at most
   ``V = min_j v_j / d_j``, accelerate at most ``A = min_j a_j / d_j`` (and jerk at most
   ``J = min_j j_j / d_j``). The time is ``2 / sqrt(A)`` when full speed is never reached
   (``V^2 / A >= 1``) and ``1 / V + V / A`` otherwise; with jerk limits the exact
-  7-segment profile's (:func:`~subtask_opt.arm._kinematics_kernels.scurve_time_nb`).
+  7-segment profile's (:func:`~subtask_opt.kinematics._kernels.scurve_time_nb`).
 * ``time`` (planar arms, nothing to collide with: the thesis' model): each joint its own
   profile, stretched to end with the slowest, ``max_j T(d_j; v_j, a_j, j_j)``
-  (:func:`~subtask_opt.arm._kinematics_kernels.joint_tensor`). Never longer than the
+  (:func:`~subtask_opt.kinematics._kernels.joint_tensor`). Never longer than the
   phase-synchronised move; equal when the limits are proportional. Measured on the UR5
   box cell (``benchmarks/same_answers.py``): time synchronisation's curved paths put more
   legs in collision and the tour came out 37% longer (13.95 s against 10.20 s), which is
@@ -35,8 +35,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from subtask_opt.arm._kinematics_kernels import scurve_time_nb
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.kinematics._kernels import scurve_time_nb
 
 
 class JointLimits(NamedTuple):

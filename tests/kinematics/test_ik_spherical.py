@@ -1,4 +1,4 @@
-"""Tests of the spherical-wrist closed form of subtask_opt.arm.ik.
+"""Tests of the spherical-wrist closed form of subtask_opt.kinematics.ik.
 
 Oracles: Pinocchio's forward kinematics (every solution reaches its pose), the
 configuration that generated a pose (it must be among the solutions), the joint
@@ -15,18 +15,18 @@ import math
 import numpy as np
 import pytest
 
-from subtask_opt.arm import ik as ik_module
-from subtask_opt.arm.ik import (
+from subtask_opt.arm.poses import make_targets
+from subtask_opt.base.errors import ParameterError
+from subtask_opt.kinematics import ik as ik_module
+from subtask_opt.kinematics.ik import (
     IKParams,
     IKSolver,
     SphericalWristKinematics,
     spherical_wrist_kinematics,
 )
-from subtask_opt.arm.poses import make_targets
-from subtask_opt.arm.serial import load_serial_arm
-from subtask_opt.base.errors import ParameterError
-from tests.arm.test_ik import _alternative_count, _fk_error, _mod_distance
+from subtask_opt.kinematics.serial import load_serial_arm
 from tests.conftest import SHARED_DATA
+from tests.kinematics.test_ik import _alternative_count, _fk_error, _mod_distance
 
 TWO_PI = 2 * math.pi
 
@@ -170,7 +170,7 @@ def test_batched_targets_equal_per_pose_solutions(wrap):
     far = np.array([3.0, 0.0, 0.0, 0.0, 0.0, 1.0])  # out of reach
     targets = make_targets(np.array(rows + [far]), axis_step=45, standoff=0.01)
     solver = IKSolver(arm, IKParams(wrap_alternatives=wrap))
-    result = solver.solve_targets(targets)
+    result = solver.solve_targets(targets.poses)
     assert result.unreachable() == [len(rows)]
     for i, block in enumerate(targets.poses):
         per_pose = [solver.solve(p) for p in block]
@@ -259,8 +259,9 @@ def test_robotsp_holes_closed_form_finds_every_dls_solution():
     rows = np.loadtxt(path, delimiter=",", skiprows=1)
     targets = make_targets(rows, axis_step=45, standoff=0.01)
     params = IKParams(wrap_alternatives=False)
-    closed = IKSolver(arm, params).solve_targets(targets)
-    dls = IKSolver(arm, IKParams(method="dls", wrap_alternatives=False)).solve_targets(targets)
+    closed = IKSolver(arm, params).solve_targets(targets.poses)
+    dls_params = IKParams(method="dls", wrap_alternatives=False)
+    dls = IKSolver(arm, dls_params).solve_targets(targets.poses)
     assert closed.method == "closed_form" and dls.method == "dls"
     for i in range(len(rows)):
         for q, j in zip(dls.configurations[i], dls.pose_index[i], strict=True):

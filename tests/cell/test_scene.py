@@ -1,4 +1,4 @@
-"""Tests of subtask_opt.arm.scene: box scenes, self-collision, swept legs."""
+"""Tests of subtask_opt.cell.scene: box scenes, self-collision, swept legs."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from subtask_opt.arm.scene import Box, CollisionChecker, Scene
-from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.cell.scene import Box, CollisionChecker, Scene
+from subtask_opt.kinematics.serial import load_serial_arm
 from tests.conftest import SHARED_DATA
 
 
@@ -315,8 +315,8 @@ def test_robotsp_home_is_free_in_the_robotsp_scene():
     checker = Scene.load(path).for_arm(arm)
     assert not checker.in_collision(np.radians([0, -20, 130, 0, 70, 0]))
     # every configuration putting the drill tip 3 cm deep into the panel hits the panel
-    from subtask_opt.arm.ik import IKParams, IKSolver
     from subtask_opt.arm.poses import axis_poses
+    from subtask_opt.kinematics.ik import IKParams, IKSolver
 
     poses = axis_poses([0.60, 0.0, 0.45], [1.0, 0.0, 0.0], axis_step=90)
     solver = IKSolver(arm, IKParams(starts=16))
@@ -337,7 +337,7 @@ def _urdf_with_mesh(folder, filename: str):
     "file:///etc/passwd", "/etc/passwd", "../outside.stl", "meshes/../../outside.stl",
     "package://../outside.stl", "http://example.com/x.stl", "escape/link.stl"])
 def test_mesh_paths_outside_the_robot_folders_are_refused(tmp_path, filename):
-    from subtask_opt.arm.scene import confined_meshes
+    from subtask_opt.cell.scene import confined_meshes
 
     robot = tmp_path / "robot"
     robot.mkdir()
@@ -351,7 +351,7 @@ def test_mesh_paths_outside_the_robot_folders_are_refused(tmp_path, filename):
 
 
 def test_mesh_paths_inside_the_robot_folders_are_kept(tmp_path):
-    from subtask_opt.arm.scene import confined_meshes
+    from subtask_opt.cell.scene import confined_meshes
 
     (tmp_path / "meshes").mkdir()
     (tmp_path / "meshes" / "a.stl").write_text("solid a\nendsolid a\n")

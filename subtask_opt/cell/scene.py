@@ -13,7 +13,7 @@ A :class:`Scene` is read from JSON (version 2; a version-1 file, boxes only, is 
 Every key is optional but the document needs one of ``boxes``, ``meshes``, ``tool``.
 ``rotation`` is optional everywhere: a 3x3 matrix whose columns are the object's axes in
 its frame (the robot's base; the tool's frame for the tool's parts). Mesh files (STL, OBJ,
-DAE: whatever coal's ``MeshLoader`` reads, :mod:`subtask_opt.arm.meshes` for the limits)
+DAE: whatever coal's ``MeshLoader`` reads, :mod:`subtask_opt.cell.meshes` for the limits)
 are paths relative to the scene file's folder, which they may not leave; ``scale`` is a
 number or three. ``note`` is free text, never read (the only key that means nothing);
 any other unknown key, at any level, is refused with one line naming it, as are missing
@@ -28,7 +28,7 @@ defines the TCP, the point and axes that reach the targets (``tcp``: ``xyz`` in 
 target and a standoff backs it off along the TCP's own z axis
 (:class:`~subtask_opt.arm.serial_problem.SerialProblem` mounts a scene's tool itself).
 
-:meth:`Scene.for_arm` binds it to a :class:`~subtask_opt.arm.serial.SerialArm`
+:meth:`Scene.for_arm` binds it to a :class:`~subtask_opt.kinematics.serial.SerialArm`
 as a :class:`CollisionChecker`. The robot's geometry is the URDF's collision
 geometry (meshes resolved through the arm's package folders); a URDF with no
 collision geometry gets one capsule per link instead, from each joint origin to
@@ -64,10 +64,10 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm.meshes import Mesh, check_rotation
-from subtask_opt.arm.serial import SerialArm
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
 from subtask_opt.base.files import parse_json, read_text
+from subtask_opt.cell.meshes import Mesh, check_rotation
+from subtask_opt.kinematics.serial import SerialArm
 
 MAX_SCENE_BYTES = 8 * 1024 * 1024
 _ROT_TOL = 1e-6
@@ -309,7 +309,7 @@ class Scene:
     """The cell around an arm: boxes and meshes in its base frame, and an optional tool.
 
     Build it with :meth:`load` or :meth:`from_dict` (or directly from :class:`Box`,
-    :class:`~subtask_opt.arm.meshes.Mesh` and :class:`Tool` objects).
+    :class:`~subtask_opt.cell.meshes.Mesh` and :class:`Tool` objects).
     """
 
     boxes: tuple[Box, ...] = ()

@@ -1,14 +1,14 @@
 """Collision-free legs around obstacles: OMPL's RRTConnect in joint space, then timed.
 
 A leg whose straight joint-space line collides
-(:meth:`~subtask_opt.arm.scene.CollisionChecker.leg_in_collision`) is planned by
+(:meth:`~subtask_opt.cell.scene.CollisionChecker.leg_in_collision`) is planned by
 :func:`plan_detour`:
 
 1. OMPL's RRTConnect (the ``ompl`` wheel; Kuffner and LaValle's bidirectional RRT) in the
    box of the joint limits, with the collision checker as the state validity callback.
    OMPL checks each motion at states no farther apart (Euclidean, in radians) than
    ``coarse * clearance / |R|``, where R are the checker's sweep radii
-   (:attr:`~subtask_opt.arm.scene.CollisionChecker.sweep_radii`; with ``coarse`` 1 no
+   (:attr:`~subtask_opt.cell.scene.CollisionChecker.sweep_radii`; with ``coarse`` 1 no
    point of the arm or the tool moves more than the clearance between two checked states,
    the same rule as the straight legs' sweep).
 2. OMPL's path simplifier (shortcuts, vertex reduction, collapsing), which keeps the path
@@ -18,7 +18,7 @@ A leg whose straight joint-space line collides
    greedily shortcut by that sweep (each waypoint is a stop, see 4). ``attempts`` plans
    with different seeds are made and the fastest kept.
 4. Timing: rest-to-rest ruckig moves chained through the waypoints, each along its
-   straight joint-space segment (:func:`~subtask_opt.arm.timing.joint_legs.joint_move`,
+   straight joint-space segment (:func:`~subtask_opt.kinematics.joint_moves.joint_move`,
    phase-synchronised, the arm's velocity, acceleration and jerk limits). ruckig's
    intermediate waypoints are a Pro feature and toppra's splines through the waypoints
    would leave the checked segments, so the arm stops at each waypoint: the time is an
@@ -40,11 +40,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from subtask_opt.arm.timing.joint_legs import JointLimits, joint_leg_times, ruckig_leg_time
 from subtask_opt.base.errors import ParameterError, require_in_range, require_int
+from subtask_opt.kinematics.joint_moves import JointLimits, joint_leg_times, ruckig_leg_time
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.scene import CollisionChecker
+    from subtask_opt.cell.scene import CollisionChecker
 
 _OMPL_LOCK = threading.Lock()
 

@@ -1,4 +1,4 @@
-"""Tests of subtask_opt.arm.ik: every IK solution, closed form (UR) and DLS."""
+"""Tests of subtask_opt.kinematics.ik: every IK solution, closed form (UR) and DLS."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from subtask_opt.arm.ik import IKParams, IKSolver, ur_kinematics
 from subtask_opt.arm.poses import load_targets, make_targets
-from subtask_opt.arm.serial import load_serial_arm
 from subtask_opt.base.errors import ParameterError
+from subtask_opt.kinematics.ik import IKParams, IKSolver, ur_kinematics
+from subtask_opt.kinematics.serial import load_serial_arm
 from tests.conftest import SHARED_DATA
 
 TWO_PI = 2 * math.pi
@@ -219,7 +219,7 @@ def test_vs060_tool_axis_target_solution_set():
     targets = make_targets(row[None], axis_step=45, standoff=0.01)
     np.testing.assert_allclose(targets.poses[0][0][:3, 3], tool[:3, 3], atol=1e-12)
     solver = IKSolver(arm, IKParams(method="dls", starts=32))
-    result = solver.solve_targets(targets, seed=0)
+    result = solver.solve_targets(targets.poses, seed=0)
     configs, index = result.configurations[0], result.pose_index[0]
     assert result.method == "dls"
     assert len(configs) > 0
@@ -241,7 +241,7 @@ def test_ur5_tool_axis_target_has_every_sample_solved():
     pose = _generic_ur5_pose(9)
     row = np.concatenate([pose[:3, 3], pose[:3, 2]])
     targets = make_targets(row[None], axis_step=90)
-    result = IKSolver(arm).solve_targets(targets)
+    result = IKSolver(arm).solve_targets(targets.poses)
     index = result.pose_index[0]
     assert sorted(set(index.tolist())) == [0, 1, 2, 3]
     for q, j in zip(result.configurations[0], index, strict=True):
@@ -279,6 +279,12 @@ def test_solve_refuses_bad_poses():
         solver.solve(np.eye(3))
     with pytest.raises(ParameterError, match="finite"):
         solver.solve(np.full((4, 4), np.nan))
+    with pytest.raises(ParameterError, match="one per target; got ndarray"):
+        solver.solve_targets(np.eye(4)[None, None])  # one array, not a sequence of blocks
+    with pytest.raises(ParameterError, match="one per target; got PoseTargets"):
+        solver.solve_targets(make_targets(np.array([[0.4, 0.2, 0.3, 0, 0, -1.0]])))
+    with pytest.raises(ParameterError, match="finite"):
+        solver.solve_targets([np.full((1, 4, 4), np.nan)])
 
 
 @pytest.mark.bench
@@ -289,7 +295,7 @@ def test_robotsp_targets_all_solutions_reach_their_poses():
         pytest.skip(f"shared data not found at {path}")
     arm = _arm("vs060_drill")
     targets = load_targets(path, axis_step=45, standoff=0.01)
-    result = IKSolver(arm).solve_targets(targets, seed=0)
+    result = IKSolver(arm).solve_targets(targets.poses, seed=0)
     for i, (configs, index) in enumerate(zip(result.configurations, result.pose_index,
                                              strict=True)):
         for q, j in zip(configs, index, strict=True):
@@ -353,7 +359,7 @@ def test_ur_targets_batched_equal_the_per_pose_solutions(wrap):
         rows.append([*pose[:3, 3], *pose[:3, 2]])
     targets = make_targets(np.array(rows), axis_step=90.0)
     solver = IKSolver(arm, IKParams(wrap_alternatives=wrap))
-    batched = solver.solve_targets(targets)
+    batched = solver.solve_targets(targets.poses)
     for i, block in enumerate(targets.poses):
         got = batched.configurations[i]
         ref = np.vstack([solver.solve(pose) for pose in block])

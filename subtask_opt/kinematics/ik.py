@@ -67,9 +67,8 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm.poses import PoseTargets
-from subtask_opt.arm.serial import SerialArm, as_pose_array
 from subtask_opt.base.errors import ParameterError, require_in_range, require_int
+from subtask_opt.kinematics.serial import SerialArm, as_pose_array
 
 METHODS: tuple[str, ...] = ("auto", "closed_form", "dls")
 TWO_PI = 2.0 * math.pi
@@ -1060,23 +1059,27 @@ class IKSolver:
             out.extend(self._alternatives(q))
         return np.array(out) if out else np.zeros((0, self.arm.nq))
 
-    def solve_targets(self, targets: PoseTargets, *, seed: int | None = 0) -> TargetSolutions:
+    def solve_targets(self, poses: Sequence[Any], *, seed: int | None = 0) -> TargetSolutions:
         """Solutions of every candidate pose of every target.
 
-        Candidate j of target i uses the generator ``default_rng([seed, i, j])``
-        (seed None: fresh entropy), so a target's solutions do not depend on the others.
+        Args:
+            poses: one (k_i, 4, 4) array of candidate poses per target (as
+                :attr:`~subtask_opt.arm.poses.PoseTargets.poses` holds them).
+            seed: candidate j of target i uses the generator ``default_rng([seed, i, j])``
+                (None: fresh entropy), so a target's solutions do not depend on the others.
         """
-        if not isinstance(targets, PoseTargets):
-            raise ParameterError(f"targets must be PoseTargets, got {type(targets).__name__}")
+        if isinstance(poses, np.ndarray) or not isinstance(poses, Sequence):
+            raise ParameterError("poses must be a sequence of (k, 4, 4) pose arrays, one per "
+                                 f"target; got {type(poses).__name__}")
         if seed is not None:
             require_int("IKSolver", "seed", seed, 0)
         if self.ur is not None or self.spherical is not None:
-            return self._solve_targets_batched(targets)
+            return self._solve_targets_batched(poses)
         from subtask_opt.base.stop import check_time_limit
 
         configurations, indices = [], []
-        for i, block in enumerate(targets.poses):
-            check_time_limit(f"in the IK (target {i + 1} of {len(targets.poses)})")
+        for i, block in enumerate(poses):
+            check_time_limit(f"in the IK (target {i + 1} of {len(poses)})")
             sols: list[np.ndarray] = []
             idx: list[int] = []
             for j, pose in enumerate(block):
@@ -1089,16 +1092,16 @@ class IKSolver:
         return TargetSolutions(configurations=tuple(configurations), pose_index=tuple(indices),
                                method=self.method)
 
-    def _solve_targets_batched(self, targets: PoseTargets) -> TargetSolutions:
+    def _solve_targets_batched(self, poses: Sequence[Any]) -> TargetSolutions:
         """:meth:`solve_targets` for an arm with a closed form (UR or spherical wrist): every
         candidate pose of every target in one numpy batch, no per-target Python loop."""
         nq = self.arm.nq
-        blocks = [np.asarray(block, dtype=np.float64) for block in targets.poses]
+        blocks = [np.asarray(block, dtype=np.float64) for block in poses]
         sizes = [b.shape[0] for b in blocks]
-        poses = np.concatenate(blocks) if sum(sizes) else np.zeros((0, 4, 4))
-        if not np.all(np.isfinite(poses)):
+        stacked_poses = np.concatenate(blocks) if sum(sizes) else np.zeros((0, 4, 4))
+        if not np.all(np.isfinite(stacked_poses)):
             raise ParameterError("pose must be finite")
-        canon = self._closed_form_canonical(poses)
+        canon = self._closed_form_canonical(stacked_poses)
         counts = np.array([c.shape[0] for c in canon], dtype=np.int64)
         stacked = np.concatenate(canon) if counts.sum() else np.zeros((0, nq))
         pose_of = np.repeat(np.arange(len(canon)), counts)

@@ -1,6 +1,6 @@
 """Validation of per-joint limit arrays, shared by the planar arm's
-:class:`~subtask_opt.arm.model.JointLimits` and the serial arm's
-:class:`~subtask_opt.arm.serial.SerialLimits`."""
+:class:`~subtask_opt.kinematics.planar.JointLimits` and the serial arm's
+:class:`~subtask_opt.kinematics.serial.SerialLimits`."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Tests of subtask_opt.arm.model: model loading, FK/IK/Jacobian against Pinocchio, reachability."""
+"""Tests of subtask_opt.kinematics.planar: model loading, FK/IK/Jacobian against Pinocchio,
+reachability."""
 
 from __future__ import annotations
 
@@ -13,15 +14,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm import _kinematics_kernels as _k
-from subtask_opt.arm.model import (
+from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
+from subtask_opt.kinematics import _kernels as _k
+from subtask_opt.kinematics.planar import (
     ROBOT_NAMES,
     Arm,
     CartesianLimits,
     JointLimits,
     load_planar_arm,
 )
-from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 
 ROBOTS_DIR = Path(__file__).resolve().parents[2] / "robots"
 LIMITS = JointLimits([-3.0, -2.5], [3.0, 2.5], [2.0, 2.0], [4.0, 4.0])

@@ -14,7 +14,7 @@ cannot be read, holds no triangle, is degenerate or is too large:
 
 coal checks a mesh as its surface (a triangle soup), not as a solid: an arm link held
 entirely inside a closed mesh, touching none of its triangles, is not in collision. Legs
-are swept densely enough (:mod:`subtask_opt.arm.scene`) that no link can pass through a
+are swept densely enough (:mod:`subtask_opt.cell.scene`) that no link can pass through a
 surface between two checks, so only a configuration that starts inside a mesh could hide
 there; the configurations of a tour start at the home, which is checked.
 """

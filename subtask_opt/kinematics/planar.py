@@ -7,7 +7,7 @@ kinematics at q = 0), so any URDF with two revolute joints about axes parallel
 to the world z axis works. Coordinates are metres in the robot model's world
 frame; the arm moves in a plane z = const and a subtask is a point (x, y).
 
-Elbow branches (see also :mod:`subtask_opt.arm._kinematics_kernels`): branch 0,
+Elbow branches (see also :mod:`subtask_opt.kinematics._kernels`): branch 0,
 "elbow down", puts the elbow on the clockwise (right-hand) side of the line
 from the base to the tip; branch 1, "elbow up", on the counter-clockwise side.
 For an arm reaching along +x with counter-clockwise joints this is the usual
@@ -28,9 +28,6 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm import _kinematics_kernels as _k
-from subtask_opt.arm.limit_arrays import LIMIT_RANGE, freeze_limit_arrays
-from subtask_opt.arm.serial import example_robot_data_share, robots_dir
 from subtask_opt.base.errors import (
     InputDataError,
     ParameterError,
@@ -38,6 +35,9 @@ from subtask_opt.base.errors import (
     require_in_range,
 )
 from subtask_opt.base.files import check_input_file, parse_json, quiet_stderr, read_text
+from subtask_opt.kinematics import _kernels as _k
+from subtask_opt.kinematics.limit_arrays import LIMIT_RANGE, freeze_limit_arrays
+from subtask_opt.kinematics.serial import example_robot_data_share, robots_dir
 
 ROBOT_NAMES: tuple[str, ...] = ("planar_2r", "asr_twodof")
 BRANCH_NAMES: tuple[str, str] = ("elbow-down", "elbow-up")
@@ -103,7 +103,7 @@ class Arm:
     (scratch), ``tip_frame_id``, ``link_lengths`` (L1, L2), ``base_xy``,
     ``joint_limits``, ``cartesian_limits``, ``axis_signs`` (+1 if a joint turns
     counter-clockwise seen from +z), ``angle_offsets`` (geometric angles a1, a2 at
-    q = 0), ``kinematics`` (the :class:`~subtask_opt.arm._kinematics_kernels.ArmKinematics`
+    q = 0), ``kinematics`` (the :class:`~subtask_opt.kinematics._kernels.ArmKinematics`
     the numba kernels take).
     """
 

@@ -1,4 +1,4 @@
-"""Tests of subtask_opt.arm.serial: loading serial arms, limits, tool frames, FK."""
+"""Tests of subtask_opt.kinematics.serial: loading serial arms, limits, tool frames, FK."""
 
 from __future__ import annotations
 
@@ -10,14 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from subtask_opt.arm.serial import (
+from subtask_opt.base.errors import InputDataError, ParameterError
+from subtask_opt.kinematics.serial import (
     SERIAL_ROBOT_NAMES,
     SerialLimits,
     load_serial_arm,
     pose_error,
     robots_dir,
 )
-from subtask_opt.base.errors import InputDataError, ParameterError
 
 ROBOTS = Path(__file__).resolve().parents[2] / "robots"
 
