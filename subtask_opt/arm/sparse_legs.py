@@ -342,7 +342,9 @@ def bound_inputs(flat: np.ndarray, offsets: np.ndarray, points: np.ndarray,
     edges = np.unique(np.sort(np.stack([a, b], axis=1)[a != b], axis=1), axis=0)
     weights = _pair_minima(np.ascontiguousarray(flat), offsets, edges[:, 0].copy(),
                            edges[:, 1].copy(), limits)
-    if levers is None:
+    if k == n - 1:  # every pair is an edge: no other pair to bound
+        rho = np.full(n, np.inf)
+    elif levers is None:
         rho = np.zeros(n)
     else:  # every target beyond a's k nearest is at least this far from it
         far = np.asarray(dist, dtype=np.float64).reshape(n, k + 1)[:, k]

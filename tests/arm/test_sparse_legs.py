@@ -103,6 +103,25 @@ def test_cap_keeps_the_optimum_on_held_out_panels(ur10, seed):
                                                                 rel=1e-9)
 
 
+def test_bound_inputs_with_every_pair_known_bound_no_other_pair(ur10):
+    """With k_bound >= N - 1 every pair is an edge with its exact cheapest leg (brute
+    force by joint_leg_times), so no other pair needs a bound: rho is +inf (a finite rho
+    would only weaken the 1-tree through its star)."""
+    flat, off, points = _solutions(ur10, 6, seed=2)
+    lim = _limits(ur10)
+    home = joint_leg_times(HOME, flat, lim)[0]
+    edges, weights, rho, home_min = sl.bound_inputs(flat, off, points, home, lim,
+                                                    sl.reach_levers(ur10), k_bound=10)
+    assert edges.shape[0] == 15 and np.all(np.isinf(rho))
+    for (a, b), w in zip(edges, weights, strict=True):
+        block = joint_leg_times(flat[off[a]:off[a + 1]], flat[off[b]:off[b + 1]], lim)
+        assert w == pytest.approx(block.min(), rel=1e-12)
+    np.testing.assert_allclose(home_min, np.minimum.reduceat(home, off[:-1]))
+    *_, rho_few, _ = sl.bound_inputs(flat, off, points, home, lim, sl.reach_levers(ur10),
+                                     k_bound=3)
+    assert np.all(np.isfinite(rho_few))
+
+
 def test_memory_check_refuses_before_work():
     with pytest.raises(ParameterError, match="GiB"):
         sl.check_memory(2**40, limit=2**30)

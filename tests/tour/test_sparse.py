@@ -109,6 +109,48 @@ def test_bound_with_every_edge_is_close_on_a_metric_instance():
     assert 0.85 * optimum <= bound <= optimum * (1 + 1e-9)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_bound_with_every_edge_equals_the_dense_held_karp_bound(seed):
+    """A second method: with every pair exact (60 targets, 1,770 edges, so the ascent
+    steers over each target's cheap edges first), the bound equals the Held-Karp bound
+    of the (N + 1) x (N + 1) matrix of target-level cheapest legs and the home
+    (tour.bound.lower_bound) to 0.1%, and stays below a tour of that matrix."""
+    from subtask_opt.tour.bound import lower_bound
+
+    n, k = 60, 2
+    data, full, home, *_ = _instance(seed, n, k, n - 1)
+    off = data.offsets
+    cheapest = np.array([[full[off[a]:off[a + 1], off[b]:off[b + 1]].min()
+                          for b in range(n)] for a in range(n)])
+    home_min = np.minimum.reduceat(home, off[:-1])
+    matrix = np.zeros((n + 1, n + 1))
+    matrix[:n, :n] = cheapest
+    matrix[n, :n] = matrix[:n, n] = home_min
+    edges = np.array([(a, b) for a in range(n) for b in range(a + 1, n)])
+    assert edges.shape[0] > ts.ASCENT_EDGES * n  # the two-phase ascent runs
+    tour = np.concatenate([[n], np.argsort(np.arctan2(*(data.coords - 0.5).T)), [n]])
+    upper = float(matrix[tour[:-1], tour[1:]].sum())
+    bound = ts.one_tree_bound(n, edges, cheapest[edges[:, 0], edges[:, 1]],
+                              np.full(n, np.inf), home_min, upper=upper)
+    held_karp = lower_bound(matrix, seed=0)
+    assert bound <= upper * (1 + 1e-9)
+    assert bound == pytest.approx(held_karp, rel=1e-3)
+
+
+def test_cheapest_edges_are_each_nodes_k_cheapest():
+    """Brute force: an edge is kept when it is among the k cheapest of either node."""
+    rng = np.random.default_rng(5)
+    n, k = 12, 3
+    edges = np.array([(a, b) for a in range(n) for b in range(a + 1, n) if rng.random() < 0.6])
+    weights = rng.permutation(edges.shape[0]).astype(float)  # distinct weights
+    keep = ts._cheapest_edges(n, edges, weights, k)
+    expected = np.zeros(edges.shape[0], dtype=bool)
+    for node in range(n):
+        mine = np.flatnonzero((edges == node).any(axis=1))
+        expected[mine[np.argsort(weights[mine])[:k]]] = True
+    np.testing.assert_array_equal(keep, expected)
+
+
 def test_bad_inputs_are_refused():
     data, *_ = _instance(1, 6, 2, 3)
     with pytest.raises(ParameterError, match="seed"):
