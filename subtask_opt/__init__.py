@@ -33,7 +33,8 @@ if TYPE_CHECKING:
         validate,
     )
     from subtask_opt.arm.report import TourReport
-    from subtask_opt.arm.tasks import CASE_NAMES, SubtaskSet, builtin_case, save_subtasks
+    from subtask_opt.arm.targets import Targets
+    from subtask_opt.arm.tasks import CASE_NAMES, builtin_case, save_subtasks
     from subtask_opt.arm.timing.models import TIME_MODELS
     from subtask_opt.base.errors import (
         InputDataError,
@@ -58,7 +59,8 @@ _SOURCES: dict[str, tuple[str, ...]] = {
         "trajectory", "validate",
     ),
     "subtask_opt.arm.report": ("TourReport",),
-    "subtask_opt.arm.tasks": ("CASE_NAMES", "SubtaskSet", "builtin_case", "save_subtasks",),
+    "subtask_opt.arm.targets": ("Targets",),
+    "subtask_opt.arm.tasks": ("CASE_NAMES", "builtin_case", "save_subtasks",),
     "subtask_opt.arm.timing.models": ("TIME_MODELS",),
     "subtask_opt.base.errors": (
         "InputDataError", "NoPathError", "ParameterError", "SubtaskOptError",
@@ -93,7 +95,7 @@ __all__ = [
     "load_robot", "Robot", "load_targets", "ArmProblem", "Joints", "solve", "Result", "trajectory",
     "validate", "TourConstraints", "SolverParams", "PRESETS", "DEFAULT_TIME_MODEL",
     "TIME_MODELS", "TourReport",
-    "SubtaskSet", "builtin_case", "save_subtasks", "CASE_NAMES",
+    "Targets", "builtin_case", "save_subtasks", "CASE_NAMES",
     "MatrixProblem", "ClusteredProblem", "held_karp", "milp_optimum", "exact_constrained",
     "MaxGenerations", "MaxRuntime", "NoImprovement", "TargetCost",
     "History", "PlanResult",

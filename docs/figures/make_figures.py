@@ -20,18 +20,19 @@ matplotlib.use("Agg")
 import numpy as np  # noqa: E402
 
 from subtask_opt import builtin_case, solve
-from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.arm.planar_problem import PlanarProblem  # noqa: E402
-from subtask_opt.arm.tasks import SubtaskSet, random_subtasks  # noqa: E402
+from subtask_opt.arm.targets import Targets
+from subtask_opt.arm.tasks import random_subtasks  # noqa: E402
+from subtask_opt.kinematics.planar import load_planar_arm
 from subtask_opt.plotting.sequencing import save_solution_figure  # noqa: E402
 
 
-def grid_part(n_side: int = 5) -> SubtaskSet:
+def grid_part(n_side: int = 5) -> Targets:
     """An n x n lattice at x in [0.22, 0.50] m, y in [-0.14, 0.14] m (planar_2r reaches all)."""
     xs = np.linspace(0.22, 0.50, n_side)
     ys = np.linspace(-0.14, 0.14, n_side)
     pts = np.array([(x, y) for y in ys for x in xs])
-    return SubtaskSet(pts, name=f"grid{n_side * n_side}")
+    return Targets(pts, name=f"grid{n_side * n_side}")
 
 
 def main(argv: list[str] | None = None) -> int:

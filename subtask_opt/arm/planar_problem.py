@@ -26,7 +26,7 @@ from subtask_opt.tour.solve import Result, SolverParams
 from subtask_opt.tour.solve import solve as solve_tour
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.tasks import SubtaskSet
+    from subtask_opt.arm.targets import Targets
     from subtask_opt.arm.timing.models import TimingResult
     from subtask_opt.kinematics.planar import Arm
 
@@ -77,7 +77,7 @@ class PlanarProblem:
     ``elbow`` branch; :meth:`decode` gives the best configurations of an order.
     """
 
-    subtasks: SubtaskSet
+    subtasks: Targets
     arm: Arm
     time_model: str = DEFAULT_TIME_MODEL
     first: int | None = None
@@ -90,7 +90,7 @@ class PlanarProblem:
     _tour: MatrixProblem | ClusteredProblem = field(init=False, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        from subtask_opt.arm.tasks import SubtaskSet
+        from subtask_opt.arm.targets import Targets, describe
         from subtask_opt.arm.timing.models import travel_times
         from subtask_opt.kinematics.planar import Arm
 
@@ -100,9 +100,9 @@ class PlanarProblem:
         if not isinstance(self.arm, Arm):
             raise ParameterError(f"PlanarProblem.arm must be an Arm, got "
                                  f"{type(self.arm).__name__}")
-        if not isinstance(self.subtasks, SubtaskSet):
-            raise ParameterError(f"PlanarProblem.subtasks must be a SubtaskSet (see "
-                                 f"load_subtasks), got {type(self.subtasks).__name__}")
+        if not (isinstance(self.subtasks, Targets) and self.subtasks.planar):
+            raise ParameterError(f"PlanarProblem.subtasks must be planar Targets (see "
+                                 f"load_subtasks), got {describe(self.subtasks)}")
         if self.subtasks.theta is not None and self.time_model in ("joint", "line"):
             warnings.warn(f"the {self.time_model} model ignores the subtasks' theta: a 2-link "
                           "arm cannot choose its tool angle (it follows from the position and "
@@ -244,7 +244,7 @@ def _with_home(problem: PlanarProblem, home: tuple[float, float],
     visited on elbow ``branch`` when one is given."""
     import dataclasses
 
-    from subtask_opt.arm.tasks import DUPLICATE_TOL, SubtaskSet
+    from subtask_opt.arm.targets import DUPLICATE_TOL, Targets
     from subtask_opt.base.errors import UnreachableError
 
     xy = np.array(home, dtype=float)
@@ -261,7 +261,7 @@ def _with_home(problem: PlanarProblem, home: tuple[float, float],
         raise InputDataError(f"home point ({xy[0]:.6g}, {xy[1]:.6g}) is subtask {close[0]}; "
                              "a home is not a subtask (use start= for a closed tour from it)")
     theta = problem.subtasks.theta
-    subtasks = SubtaskSet(np.vstack([pts, xy]),
+    subtasks = Targets(np.vstack([pts, xy]),
                           None if theta is None else np.append(theta, 0.0),
                           problem.subtasks.name)
     searched = dataclasses.replace(problem, subtasks=subtasks, first=None)

@@ -1,4 +1,5 @@
-"""Pose targets of a serial arm: a point with a tool axis, or a full pose.
+"""3-D targets of a serial arm (:class:`~subtask_opt.arm.targets.Targets` with poses): a
+point with a tool axis, or a full pose.
 
 Two kinds of target, read from CSV or JSON:
 
@@ -26,12 +27,12 @@ from __future__ import annotations
 import csv
 import io
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from subtask_opt.arm.targets import MIN_AXIS_STEP, Targets
 from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
 from subtask_opt.base.files import parse_json
 
@@ -41,61 +42,6 @@ MAX_FILE_BYTES = 32 * 1024 * 1024
 """Largest target file read (bytes); a bigger file is refused before parsing."""
 
 _MIN_NORM = 1e-9
-MIN_AXIS_STEP = 5.0
-"""The finest ``axis_step`` (degrees): at most 72 poses per tool-axis target."""
-
-
-@dataclass(frozen=True, eq=False)
-class PoseTargets:
-    """Candidate tool poses per target.
-
-    Attributes:
-        poses: one read-only (k_i, 4, 4) array per target, the candidate tool poses
-            (homogeneous, base frame, metres); k_i = 1 for a full pose, the number
-            of sampled rotations for a tool axis.
-        points: (n, 3) target points as given (before the standoff).
-        axes: (n, 3) unit tool z axes (for full poses, the pose's z axis).
-        free_axis: (n,) True where the rotation about the axis is free (sampled).
-        axis_step: sampling step of the free rotation (degrees).
-        standoff: distance the tool backs off along its z axis (m).
-    """
-
-    poses: tuple[np.ndarray, ...]
-    points: np.ndarray
-    axes: np.ndarray
-    free_axis: np.ndarray
-    axis_step: float
-    standoff: float
-
-    def __post_init__(self) -> None:
-        n = len(self.poses)
-        for name, shape in (("points", (n, 3)), ("axes", (n, 3)), ("free_axis", (n,))):
-            arr = np.asarray(getattr(self, name))
-            if arr.shape != shape:
-                raise ParameterError(f"PoseTargets.{name} must have shape {shape}, "
-                                     f"got {arr.shape}")
-            arr = arr.copy()
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        poses = []
-        for i, p in enumerate(self.poses):
-            arr = np.array(p, dtype=np.float64)
-            if arr.ndim != 3 or arr.shape[1:] != (4, 4) or arr.shape[0] == 0:
-                raise ParameterError(f"PoseTargets.poses[{i}] must have shape (k, 4, 4), "
-                                     f"got {arr.shape}")
-            arr.setflags(write=False)
-            poses.append(arr)
-        object.__setattr__(self, "poses", tuple(poses))
-        require_in_range("PoseTargets", "axis_step", self.axis_step, MIN_AXIS_STEP, 360.0)
-        require_in_range("PoseTargets", "standoff", self.standoff, -1e3, 1e3)
-
-    def __len__(self) -> int:
-        return len(self.poses)
-
-    @property
-    def n_candidates(self) -> int:
-        """Total number of candidate poses over all targets."""
-        return sum(p.shape[0] for p in self.poses)
 
 
 def axis_frame(axis: Any) -> np.ndarray:
@@ -168,8 +114,8 @@ def _refuse_duplicates(arr: np.ndarray, labels: list[str]) -> None:
 
 
 def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float = 0.0,
-                 labels: list[str] | None = None) -> PoseTargets:
-    """PoseTargets from an (n, 6) array of axis rows or an (n, 7) array of pose rows."""
+                 labels: list[str] | None = None) -> Targets:
+    """3-D Targets from an (n, 6) array of axis rows or an (n, 7) array of pose rows."""
     require_in_range("make_targets", "axis_step", axis_step, MIN_AXIS_STEP, 360.0)
     require_in_range("make_targets", "standoff", standoff, -1e3, 1e3)
     arr = np.asarray(rows, dtype=np.float64)
@@ -194,9 +140,9 @@ def make_targets(rows: np.ndarray, *, axis_step: float = 45.0, standoff: float =
         poses.append(block)
         axes.append(block[0, :3, 2])
         free.append(arr.shape[1] == 6)
-    return PoseTargets(poses=tuple(poses), points=arr[:, :3], axes=np.array(axes),
-                       free_axis=np.array(free, dtype=bool), axis_step=float(axis_step),
-                       standoff=float(standoff))
+    return Targets(arr[:, :3], poses=tuple(poses), axes=np.array(axes),
+                   free_axis=np.array(free, dtype=bool), axis_step=float(axis_step),
+                   standoff=float(standoff))
 
 
 def _read_text(path: Path, max_bytes: int) -> str:
@@ -271,7 +217,7 @@ def _parse_json(text: str, path: Path) -> tuple[np.ndarray, list[str]]:
 
 
 def load_targets(path: str | Path, *, axis_step: float = 45.0, standoff: float = 0.0,
-                 max_bytes: int = MAX_FILE_BYTES) -> PoseTargets:
+                 max_bytes: int = MAX_FILE_BYTES) -> Targets:
     """Read pose targets from a ``.csv`` or ``.json`` file (format in the module doc).
 
     Raises:

@@ -161,8 +161,8 @@ def movable_joints(urdf: str | Path) -> int:
 
 def load_targets(path: str | Path, *, standoff: float = 0.0, axis_step: float = 45.0) -> Any:
     """Read targets from a CSV or JSON file: planar points (header ``x,y[,theta]``) give a
-    :class:`~subtask_opt.arm.tasks.SubtaskSet`, 3-D rows (``x,y,z,dx,dy,dz`` tool axes or
-    ``x,y,z,qx,qy,qz,qw`` poses) :class:`~subtask_opt.arm.poses.PoseTargets`.
+    planar :class:`~subtask_opt.arm.targets.Targets`, 3-D rows (``x,y,z,dx,dy,dz`` tool
+    axes or ``x,y,z,qx,qy,qz,qw`` poses) 3-D ones.
 
     Args:
         standoff: (3-D targets) metres along the tool axis the tool stops short.
@@ -309,9 +309,8 @@ class ArmProblem:
 
     def _planar(self) -> Any:
         from subtask_opt.arm.planar_problem import PlanarProblem
-        from subtask_opt.arm.tasks import SubtaskSet
 
-        _check_targets(self.targets, SubtaskSet, self.robot, "planar points (load_targets "
+        _check_targets(self.targets, True, self.robot, "planar points (load_targets "
                        "of an x,y file)")
         if isinstance(self.home, Joints):
             object.__setattr__(self, "_planar_home", _planar_home_configuration(
@@ -332,11 +331,10 @@ class ArmProblem:
                              check_all_legs=self.check_all_legs)
 
     def _serial(self) -> Any:
-        from subtask_opt.arm.poses import PoseTargets
         from subtask_opt.arm.serial_problem import SerialProblem, default_home
         from subtask_opt.cell.scene import Scene
 
-        _check_targets(self.targets, PoseTargets, self.robot, "3-D (load_targets of an "
+        _check_targets(self.targets, False, self.robot, "3-D (load_targets of an "
                        "x,y,z,... file)")
         if self.first is not None:
             raise ParameterError("ArmProblem.first applies to planar arms; a serial arm's "
@@ -392,11 +390,13 @@ def _planar_home_configuration(arm: Any, q: np.ndarray) -> tuple[tuple[float, fl
     return (float(point[0]), float(point[1])), branch
 
 
-def _check_targets(targets: Any, kind: type, robot: Robot, what: str) -> None:
-    if not isinstance(targets, kind):
+def _check_targets(targets: Any, planar: bool, robot: Robot, what: str) -> None:
+    from subtask_opt.arm.targets import Targets, describe
+
+    if not isinstance(targets, Targets) or targets.planar != planar:
         family = "a planar arm" if robot.planar else "a serial arm"
         raise ParameterError(f"{robot.name} is {family}: its targets are {what}, got "
-                             f"{type(targets).__name__}")
+                             f"{describe(targets)}")
 
 
 def solve(problem: ArmProblem | MatrixProblem | ClusteredProblem | Any, *, seed: int = 0,

@@ -68,7 +68,7 @@ from subtask_opt.tour.constraints import Canonical, TourConstraints
 from subtask_opt.tour.solve import Result
 
 if TYPE_CHECKING:
-    from subtask_opt.arm.poses import PoseTargets
+    from subtask_opt.arm.targets import Targets
     from subtask_opt.cell.detour import Detour, DetourParams
     from subtask_opt.cell.scene import CollisionChecker, Scene
     from subtask_opt.kinematics.ik import IKParams
@@ -182,7 +182,7 @@ class SerialProblem:
             (collision-free) configuration, naming its row.
     """
 
-    targets: PoseTargets
+    targets: Targets
     arm: SerialArm
     home: Any
     scene: Scene | None = None
@@ -221,13 +221,13 @@ class SerialProblem:
     _lock: threading.Lock = field(init=False, repr=False, default_factory=threading.Lock)
 
     def __post_init__(self) -> None:
-        from subtask_opt.arm.poses import PoseTargets
+        from subtask_opt.arm.targets import Targets, describe
         from subtask_opt.kinematics.ik import IKParams, IKSolver
         from subtask_opt.kinematics.serial import SerialArm
 
-        if not isinstance(self.targets, PoseTargets):
-            raise ParameterError(f"SerialProblem.targets must be PoseTargets, got "
-                                 f"{type(self.targets).__name__}")
+        if not isinstance(self.targets, Targets) or self.targets.planar:
+            raise ParameterError(f"SerialProblem.targets must be 3-D Targets, got "
+                                 f"{describe(self.targets)}")
         if not isinstance(self.arm, SerialArm):
             raise ParameterError(f"SerialProblem.arm must be a SerialArm, got "
                                  f"{type(self.arm).__name__}")
@@ -277,8 +277,10 @@ class SerialProblem:
         params = self.ik if self.ik is not None else IKParams(wrap_alternatives=False)
         mode = _legs_mode(self, params)
         check_time_limit("before the IK")
+        poses = self.targets.poses
+        assert poses is not None  # 3-D targets (checked above)
         with _phase(cpu, "ik"), _ticker(f"IK of {len(self.targets)} targets"):
-            solutions = IKSolver(arm, params).solve_targets(self.targets.poses, seed=self.ik_seed)
+            solutions = IKSolver(arm, params).solve_targets(poses, seed=self.ik_seed)
         for i, q in enumerate(solutions.configurations):
             if q.shape[0] == 0:
                 point = np.round(self.targets.points[i], 6).tolist()
@@ -443,6 +445,7 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
     counts = np.array([q.shape[0] for q in raw], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     flat = np.ascontiguousarray(np.vstack(raw))
+    assert problem.targets.poses is not None  # 3-D targets (SerialProblem checks them)
     points = np.array([p[0, :3, 3] for p in problem.targets.poses])
     with _phase(cpu, "matrix"), _ticker("configurations: dominance, cap, bound legs"):
         rev = problem.arm.revolute

@@ -1,6 +1,5 @@
-"""Subtask sets: N planar subtask positions (and optional tool angles).
-
-A :class:`SubtaskSet` holds the points in metres in the robot model's world
+"""Planar targets: reading and writing N planar subtask positions (and optional tool
+angles) as :class:`~subtask_opt.arm.targets.Targets`, in metres in the robot model's world
 frame. Files: CSV with a header ``x,y`` or ``x,y,theta``, or JSON
 ``{"points": [[x, y], ...], "theta": [...], "name": "..."}`` (``theta`` and
 ``name`` optional). Built-in cases, placed inside a given arm's reachable
@@ -13,121 +12,17 @@ from __future__ import annotations
 import csv
 import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from subtask_opt.arm.targets import Targets
 from subtask_opt.base.errors import InputDataError, ParameterError, require_int, require_positive
 from subtask_opt.base.files import parse_json, read_text
 from subtask_opt.kinematics.planar import Arm
 
 CASE_NAMES: tuple[str, ...] = ("square20", "random30")
-
-DUPLICATE_TOL = 1e-9
-"""Two subtasks closer than this (m, Euclidean) are duplicates and refused."""
-MAX_COORDINATE = 1e6
-"""Subtask coordinates are in [-1e6, 1e6] m."""
-MAX_SUBTASKS = 20_000
-"""The most subtasks a set may hold (the N x N matrices of a time model: 3.2 GB at 20 000)."""
-
-
-@dataclass(frozen=True, eq=False)
-class SubtaskSet:
-    """N planar subtasks.
-
-    Attributes:
-        points: (N, 2) float64 positions (m) in the robot's world frame; N >= 3,
-            finite, no two equal.
-        theta: optional (N,) tool angles (rad). The 2-DOF arm cannot choose its
-            tool angle (it follows from the position and elbow branch); when
-            given, the Cartesian time models use these angles for the rotation
-            instead of the arm's.
-        name: a label (file stem or case name).
-    """
-
-    points: np.ndarray
-    theta: np.ndarray | None = None
-    name: str = ""
-
-    def __post_init__(self) -> None:
-        pts = _real_array(self.points, "SubtaskSet.points", "numbers of shape (N, 2)")
-        if pts.ndim != 2 or pts.shape[1] != 2:
-            raise InputDataError(f"SubtaskSet.points must have shape (N, 2), got {pts.shape}")
-        if pts.shape[0] < 3:
-            raise InputDataError(
-                f"SubtaskSet.points needs at least 3 subtasks, got {pts.shape[0]}")
-        if pts.shape[0] > MAX_SUBTASKS:
-            raise InputDataError(f"SubtaskSet.points has {pts.shape[0]} subtasks; the limit is "
-                                 f"{MAX_SUBTASKS}")
-        bad = np.flatnonzero(~(np.abs(pts) <= MAX_COORDINATE).all(axis=1))
-        if bad.size:
-            raise InputDataError(f"subtask {bad[0]} is {pts[bad[0]].tolist()}: coordinates "
-                                 f"must be finite and within +-{MAX_COORDINATE:g} m")
-        pair = _close_pair(pts, DUPLICATE_TOL)
-        if pair is not None:
-            i, j = pair
-            raise InputDataError(
-                f"subtasks {i} and {j} are duplicates: {pts[i].tolist()} and "
-                f"{pts[j].tolist()} are closer than {DUPLICATE_TOL:g} m")
-        pts.setflags(write=False)
-        object.__setattr__(self, "points", pts)
-        if self.theta is not None:
-            th = _real_array(self.theta, "SubtaskSet.theta", f"{pts.shape[0]} numbers")
-            if th.shape != (pts.shape[0],):
-                raise InputDataError(
-                    f"SubtaskSet.theta must have {pts.shape[0]} values (one per subtask), "
-                    f"got shape {th.shape}")
-            bad = np.flatnonzero(~np.isfinite(th))
-            if bad.size:
-                raise InputDataError(f"theta of subtask {bad[0]} is not finite: {th[bad[0]]}")
-            th.setflags(write=False)
-            object.__setattr__(self, "theta", th)
-        if not isinstance(self.name, str):
-            raise ParameterError(f"SubtaskSet.name must be a string, got {self.name!r}")
-
-    def __len__(self) -> int:
-        return int(self.points.shape[0])
-
-    def __repr__(self) -> str:
-        theta = "" if self.theta is None else ", with theta"
-        return f"SubtaskSet({self.name!r}, {len(self)} subtasks{theta})"
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready form (the format :func:`load_subtasks` reads)."""
-        out: dict[str, Any] = {"name": self.name, "points": self.points.tolist()}
-        if self.theta is not None:
-            out["theta"] = self.theta.tolist()
-        return out
-
-
-def _real_array(values: Any, what: str, expected: str) -> np.ndarray:
-    """``values`` as float64, refusing strings, complex numbers and overflowing integers."""
-    try:
-        arr = np.asarray(values)
-        if arr.dtype.kind not in "iuf":
-            raise TypeError
-        return np.array(arr, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        shown = repr(values)
-        raise InputDataError(f"{what} must be real {expected}, got "
-                             f"{shown[:80] + '...' if len(shown) > 80 else shown}") from None
-
-
-def _close_pair(pts: np.ndarray, tol: float) -> tuple[int, int] | None:
-    """Two indices of points closer than ``tol`` (Euclidean), or None; O(N log N) typical."""
-    order = np.argsort(pts[:, 0], kind="stable")
-    xs = pts[order, 0]
-    for a in range(len(order)):
-        b = a + 1
-        while b < len(order) and xs[b] - xs[a] < tol:
-            i, j = int(order[a]), int(order[b])
-            if math.hypot(*(pts[i] - pts[j])) < tol:
-                return (min(i, j), max(i, j))
-            b += 1
-    return None
-
 
 def _number(text: str, path: Path, line: int, column: str) -> float:
     try:
@@ -139,7 +34,7 @@ def _number(text: str, path: Path, line: int, column: str) -> float:
             f"{path}, line {line}: {column} is not a number: {text.strip()!r}") from None
 
 
-def _load_csv(path: Path, text: str) -> SubtaskSet:
+def _load_csv(path: Path, text: str) -> Targets:
     lines = text.splitlines()
     long = next((n for n, line in enumerate(lines, start=1) if len(line) > 1000), None)
     if long is not None:
@@ -173,7 +68,7 @@ def _load_csv(path: Path, text: str) -> SubtaskSet:
     return _build(points, theta if len(header) == 3 else None, path.stem, path)
 
 
-def _load_json(path: Path, text: str) -> SubtaskSet:
+def _load_json(path: Path, text: str) -> Targets:
     data = parse_json(text, str(path))
     if not isinstance(data, dict) or "points" not in data:
         raise InputDataError(f'{path}: expected an object {{"points": [[x, y], ...]}}')
@@ -193,15 +88,15 @@ def _load_json(path: Path, text: str) -> SubtaskSet:
     return _build(points, theta, name, path)
 
 
-def _build(points: Any, theta: Any, name: str, path: Path) -> SubtaskSet:
+def _build(points: Any, theta: Any, name: str, path: Path) -> Targets:
     try:
-        return SubtaskSet(np.array(points, dtype=np.float64).reshape(-1, 2),
+        return Targets(np.array(points, dtype=np.float64).reshape(-1, 2),
                           None if theta is None else np.array(theta, dtype=np.float64), name)
     except InputDataError as exc:
         raise InputDataError(f"{path}: {exc}") from None
 
 
-def load_subtasks(path: str | Path) -> SubtaskSet:
+def load_subtasks(path: str | Path) -> Targets:
     """Read a subtask set from ``.csv`` (header ``x,y[,theta]``) or ``.json``.
 
     Raises:
@@ -216,7 +111,7 @@ def load_subtasks(path: str | Path) -> SubtaskSet:
     return _load_csv(path, text) if suffix == ".csv" else _load_json(path, text)
 
 
-def save_subtasks(subtasks: SubtaskSet, path: str | Path) -> None:
+def save_subtasks(subtasks: Targets, path: str | Path) -> None:
     """Write a subtask set as ``.csv`` or ``.json`` (by the extension), full precision."""
     path = Path(path)
     suffix = path.suffix.lower()
@@ -243,7 +138,7 @@ def _reachable_both(arm: Arm, pts: np.ndarray) -> tuple[bool, bool]:
     return bool(ok.all()), bool(ok.any(axis=1).all())
 
 
-def _square20(arm: Arm) -> SubtaskSet:
+def _square20(arm: Arm) -> Targets:
     """The largest 5 x 4 lattice in front of the arm (along its q = 0 direction).
 
     Scans spacings from large to small and distances from the base; keeps the
@@ -266,16 +161,16 @@ def _square20(arm: Arm) -> SubtaskSet:
                 continue  # and stay off the rim, where the arm is singular
             both, one = _reachable_both(arm, pts)
             if both:
-                return SubtaskSet(pts, name="square20")
+                return Targets(pts, name="square20")
             if one and fallback is None:
                 fallback = pts
     if fallback is None:
         raise ParameterError(f"no 5x4 lattice fits in the workspace of robot {arm.name!r}")
-    return SubtaskSet(fallback, name="square20")
+    return Targets(fallback, name="square20")
 
 
 def random_subtasks(arm: Arm, n: int, *, seed: int = 0, min_spacing: float | None = None,
-                    name: str = "") -> SubtaskSet:
+                    name: str = "") -> Targets:
     """n uniformly random points of the arm's reachable workspace, seeded.
 
     Rejection sampling in the bounding box of the annulus: a point is kept if
@@ -298,13 +193,13 @@ def random_subtasks(arm: Arm, n: int, *, seed: int = 0, min_spacing: float | Non
             pts[count] = p
             count += 1
             if count == n:
-                return SubtaskSet(pts, name=name or f"random{n}")
+                return Targets(pts, name=name or f"random{n}")
     raise ParameterError(
         f"cannot place {n} subtasks {min_spacing:.4g} m apart in the workspace of "
         f"{arm.name!r}: lower min_spacing or n")
 
 
-def builtin_case(name: str, arm: Arm, *, seed: int = 0) -> SubtaskSet:
+def builtin_case(name: str, arm: Arm, *, seed: int = 0) -> Targets:
     """A built-in subtask set inside ``arm``'s workspace: ``square20`` or ``random30``.
 
     ``square20`` is deterministic (``seed`` is ignored); ``random30`` draws 30
@@ -317,5 +212,5 @@ def builtin_case(name: str, arm: Arm, *, seed: int = 0) -> SubtaskSet:
     raise ParameterError(f"unknown case {name!r}: expected one of {', '.join(CASE_NAMES)}")
 
 
-__all__ = ["CASE_NAMES", "SubtaskSet", "builtin_case", "load_subtasks", "random_subtasks",
+__all__ = ["CASE_NAMES", "Targets", "builtin_case", "load_subtasks", "random_subtasks",
            "save_subtasks"]

@@ -141,7 +141,7 @@ class TargetSolutions:
         configurations: per target, a read-only (m_i, nq) array of joint solutions
             (m_i may be 0: unreachable within the limits).
         pose_index: per target, (m_i,) index of the candidate pose (in
-            ``PoseTargets.poses[i]``) each solution reaches.
+            ``Targets.poses[i]``) each solution reaches.
         method: the method used (``"closed_form"`` or ``"dls"``).
     """
 
@@ -1064,7 +1064,7 @@ class IKSolver:
 
         Args:
             poses: one (k_i, 4, 4) array of candidate poses per target (as
-                :attr:`~subtask_opt.arm.poses.PoseTargets.poses` holds them).
+                :attr:`~subtask_opt.arm.poses.Targets.poses` holds them).
             seed: candidate j of target i uses the generator ``default_rng([seed, i, j])``
                 (None: fresh entropy), so a target's solutions do not depend on the others.
         """

@@ -816,6 +816,13 @@ BOUND_POLISH = 100
 """Subgradient steps on every edge after them (the second phase)."""
 ASCENT_EDGES = 8
 """Each node's cheapest edges the first phase of :func:`one_tree_bound` steers by."""
+ASCENT_STEP = 0.1
+"""First Polyak step factor of the ascent (short: the tour's time it aims at is several
+percent above the bound's limit), with momentum :data:`ASCENT_MOMENTUM`, halved after
+:data:`ASCENT_PATIENCE` steps without a better value; the second phase starts at a tenth
+of it and a third of the patience."""
+ASCENT_MOMENTUM = 0.5
+ASCENT_PATIENCE = 60
 
 
 def one_tree_bound(n: int, edges: np.ndarray, weights: np.ndarray, rho: np.ndarray,
@@ -860,18 +867,18 @@ def one_tree_bound(n: int, edges: np.ndarray, weights: np.ndarray, rho: np.ndarr
     if not (math.isfinite(upper) and upper > 0):
         raise ParameterError(f"one_tree_bound: upper must be a finite time > 0, got {upper!r}")
     pi = np.zeros(n)
+    steps, lam, patience = int(iterations), ASCENT_STEP, ASCENT_PATIENCE
     if e.shape[0] > ASCENT_EDGES * n:
         few = _cheapest_edges(n, e, w, ASCENT_EDGES)
         _, pi = _ascent(n, e[few, 0].copy(), e[few, 1].copy(), w[few].copy(), r, h,
-                        float(upper), int(iterations), 60, 0.5, 0.1, pi)
-        steps, lam = BOUND_POLISH, 0.01
-    else:  # few edges already: every step over all of them
-        steps, lam = int(iterations), 0.1
+                        float(upper), steps, patience, ASCENT_MOMENTUM, lam, pi)
+        steps, lam, patience = BOUND_POLISH, lam / 10, patience // 3
+    # else few edges already: every step over all of them
     best, _ = _ascent(n, e[:, 0].copy(), e[:, 1].copy(), w, r, h, float(upper), steps,
-                      60 if steps > BOUND_POLISH else 20, 0.5, lam, pi)
+                      patience, ASCENT_MOMENTUM, lam, pi)
     return float(best)
 
 
-__all__ = ["ASCENT_EDGES", "BOUND_ITERATIONS", "BOUND_POLISH", "DECODE_MARGIN", "KICK_WINDOW",
-           "SearchOutcome", "SparseLegs", "WALK_SLACK", "decode", "one_tree_bound", "search",
-           "tour_time"]
+__all__ = ["ASCENT_EDGES", "ASCENT_MOMENTUM", "ASCENT_PATIENCE", "ASCENT_STEP",
+           "BOUND_ITERATIONS", "BOUND_POLISH", "DECODE_MARGIN", "KICK_WINDOW", "SearchOutcome",
+           "SparseLegs", "WALK_SLACK", "decode", "one_tree_bound", "search", "tour_time"]

@@ -15,7 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
-from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
+from subtask_opt.arm.targets import Targets
+from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.arm.timing.models import MOVE_JOINT, MOVE_LINE, MOVE_NONE, travel_times
 from subtask_opt.base.errors import NoPathError, ParameterError
 from subtask_opt.kinematics.planar import CartesianLimits, JointLimits, load_planar_arm
@@ -143,7 +144,7 @@ def test_line_through_the_inner_disc_is_reported_and_replaced_or_excluded() -> N
     bx, by = arm.base_xy
     r = 0.5 * (arm.r_min + arm.r_max)
     pts = np.array([[bx - r, by], [bx + r, by], [bx, by + r]])
-    s = SubtaskSet(pts)
+    s = Targets(pts)
     res = travel_times(s, arm, "line")
     assert res.line_failure(0, 1, 0, 0) == "leaves the reachable annulus"
     assert res.moves()[0, 1] == MOVE_JOINT

@@ -177,7 +177,7 @@ def test_bad_solver_params_name_the_field(kwargs, field):
 def test_bad_first_subtask_and_missing_inputs(arm):
     with pytest.raises(ParameterError, match="first"):
         MatrixProblem(_euclidean(0, 5), first=5)
-    with pytest.raises(ParameterError, match="subtasks must be a SubtaskSet"):
+    with pytest.raises(ParameterError, match="subtasks must be planar Targets"):
         PlanarProblem(None, arm)
     with pytest.raises(ParameterError, match="load_planar_arm"):
         PlanarProblem(builtin_case("square20", arm), "planar_2r")

@@ -185,7 +185,7 @@ def test_an_option_for_the_other_kind_of_robot_is_refused(robot, option, value,
 def test_load_targets_refuses_3d_options_for_planar_points(tmp_path) -> None:
     points = tmp_path / "p.csv"
     points.write_text("x,y\n0.3,0.1\n0.2,0.3\n0.1,0.4\n")
-    assert isinstance(so.load_targets(points), so.SubtaskSet)
+    assert isinstance(so.load_targets(points), so.Targets)
     with pytest.raises(so.ParameterError, match="standoff"):
         so.load_targets(points, standoff=0.01)
     with pytest.raises(so.ParameterError, match="tool_frame"):
@@ -220,7 +220,8 @@ def test_a_planar_home_configuration_is_the_brute_force_optimum_from_it(tour, br
     """A home given as joints: the tour starts in that elbow; checked against every order
     and every elbow of the targets, from the home built as a subtask by hand."""
     from subtask_opt.arm.planar_problem import PlanarProblem
-    from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
+    from subtask_opt.arm.targets import Targets
+    from subtask_opt.arm.tasks import random_subtasks
 
     robot = so.load_robot("planar_2r")
     arm = robot.model
@@ -229,7 +230,7 @@ def test_a_planar_home_configuration_is_the_brute_force_optimum_from_it(tour, br
     q = arm.ik(point)[branch]
     result = so.solve(so.ArmProblem(targets, robot, home=so.Joints(q)), seed=0,
                       constraints=so.TourConstraints(tour=tour))
-    by_hand = PlanarProblem(SubtaskSet(np.vstack([targets.points, point])), arm)
+    by_hand = PlanarProblem(Targets(np.vstack([targets.points, point])), arm)
     t = by_hand.timing.branch_times  # (6, 2, 6, 2)
     h = 5
     best = np.inf

@@ -1,4 +1,4 @@
-"""Tests of subtask_opt.arm.tasks: SubtaskSet validation, CSV/JSON files, built-in cases."""
+"""Tests of subtask_opt.arm.tasks: planar target files (CSV/JSON), built-in cases."""
 
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from subtask_opt.arm.targets import Targets
 from subtask_opt.arm.tasks import (
     CASE_NAMES,
-    SubtaskSet,
     builtin_case,
     load_subtasks,
     random_subtasks,
@@ -30,39 +30,6 @@ def _arm(name: str) -> Arm:
     return load_planar_arm(name)
 
 
-# ---------------------------------------------------------------- validation
-
-def test_subtask_set_basics() -> None:
-    s = SubtaskSet(PTS.tolist(), theta=[0.0, 1.0, 2.0, 3.0], name="demo")
-    assert len(s) == 4 and s.points.dtype == np.float64
-    assert not s.points.flags.writeable
-    assert "demo" in repr(s)
-    assert s.to_dict()["theta"] == [0.0, 1.0, 2.0, 3.0]
-
-
-@pytest.mark.parametrize("points, match", [
-    (PTS[:2], "at least 3 subtasks, got 2"),
-    (np.zeros((0, 2)), "at least 3 subtasks, got 0"),
-    (np.vstack([PTS, [[np.nan, 0.0]]]), r"subtask 4 is \[nan, 0.0\]: coordinates must be finite"),
-    (np.vstack([PTS, [[0.0, np.inf]]]), r"subtask 4 is \[0.0, inf\]: coordinates must be finite"),
-    (np.vstack([PTS, PTS[1:2]]), r"subtasks 1 and 4 are duplicates: \[0.3, -0.1\] and"),
-    (np.zeros((4, 3)), r"shape \(N, 2\)"),
-    ([["a", "b"]] * 3, "numbers"),
-])
-def test_bad_points(points: object, match: str) -> None:
-    with pytest.raises(InputDataError, match=match):
-        SubtaskSet(points)
-
-
-def test_bad_theta() -> None:
-    with pytest.raises(InputDataError, match="4 values"):
-        SubtaskSet(PTS, theta=[0.0, 1.0])
-    with pytest.raises(InputDataError, match="theta of subtask 2 is not finite"):
-        SubtaskSet(PTS, theta=[0.0, 1.0, np.nan, 0.0])
-    with pytest.raises(ParameterError, match="name"):
-        SubtaskSet(PTS, name=3)  # type: ignore[arg-type]
-
-
 # ---------------------------------------------------------------- files
 
 @pytest.mark.parametrize("suffix", [".csv", ".json"])
@@ -70,7 +37,7 @@ def test_bad_theta() -> None:
 def test_save_load_round_trip(tmp_path: Path, suffix: str, with_theta: bool) -> None:
     rng = np.random.default_rng(1)
     theta = rng.uniform(-3, 3, len(PTS)) if with_theta else None
-    s = SubtaskSet(PTS + rng.normal(0, 1e-3, PTS.shape), theta=theta, name="rt")
+    s = Targets(PTS + rng.normal(0, 1e-3, PTS.shape), theta=theta, name="rt")
     path = tmp_path / f"rt{suffix}"
     save_subtasks(s, path)
     back = load_subtasks(path)
@@ -130,7 +97,7 @@ def test_bad_paths(tmp_path: Path) -> None:
     with pytest.raises(InputDataError, match=r"\.csv or \.json"):
         load_subtasks(tmp_path / "points.txt")
     with pytest.raises(InputDataError, match=r"\.csv or \.json"):
-        save_subtasks(SubtaskSet(PTS), tmp_path / "points.txt")
+        save_subtasks(Targets(PTS), tmp_path / "points.txt")
 
 
 # ---------------------------------------------------------------- built-in cases

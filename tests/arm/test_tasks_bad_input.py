@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from subtask_opt.arm.tasks import DUPLICATE_TOL, SubtaskSet, load_subtasks
+from subtask_opt.arm.targets import DUPLICATE_TOL, Targets
+from subtask_opt.arm.tasks import load_subtasks
 from subtask_opt.base.errors import InputDataError, SubtaskOptError
 from tests.conftest import examples
 
@@ -28,11 +29,11 @@ def test_points_closer_than_the_tolerance_are_duplicates_wherever_they_sit(gap):
     for base in (0.3, 0.3 + 0.5e-9, 0.123456789123):
         pts = [[base, 0.1], [base + gap, 0.1], [0.2, 0.2]]
         with pytest.raises(InputDataError, match="duplicates"):
-            SubtaskSet(pts)
+            Targets(pts)
 
 
 def test_points_farther_than_the_tolerance_are_distinct():
-    SubtaskSet([[0.3, 0.1], [0.3 + 1.001 * DUPLICATE_TOL, 0.1], [0.2, 0.2]])
+    Targets([[0.3, 0.1], [0.3 + 1.001 * DUPLICATE_TOL, 0.1], [0.2, 0.2]])
 
 
 @pytest.mark.parametrize("points", [
@@ -43,7 +44,7 @@ def test_points_farther_than_the_tolerance_are_distinct():
 ])
 def test_non_real_or_out_of_range_points_are_refused(points):
     with pytest.raises(InputDataError):
-        SubtaskSet(points)
+        Targets(points)
 
 
 def test_a_huge_json_number_and_a_long_csv_line_are_refused(tmp_path):
@@ -79,7 +80,7 @@ def test_any_file_content_gives_a_set_or_our_error(tmp_path_factory, text, suffi
                                    st.none()), min_size=0, max_size=3), max_size=8))
 def test_any_points_give_a_set_or_our_error(points):
     try:
-        s = SubtaskSet(points)
+        s = Targets(points)
     except SubtaskOptError:
         return
     assert len(s) >= 3

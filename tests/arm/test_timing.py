@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
+from subtask_opt.arm.targets import Targets
+from subtask_opt.arm.tasks import builtin_case, random_subtasks
 from subtask_opt.arm.timing.models import (
     MOVE_LINE,
     TIME_MODELS,
@@ -185,7 +186,7 @@ def test_joint_model_matches_ruckig(robot: str, jerk: bool) -> None:
 def test_configurations_follow_elbow_with_fallback() -> None:
     arm = _arm("planar_2r")
     # (-0.545, -0.198) lies behind the base: the shoulder limit leaves only elbow-up.
-    s = SubtaskSet([[0.4, 0.1], [0.3, -0.2], [-0.545, -0.198]])
+    s = Targets([[0.4, 0.1], [0.3, -0.2], [-0.545, -0.198]])
     assert np.isnan(arm.ik(s.points[2])[0]).all()
     down = travel_times(s, arm, "joint", elbow=0)
     up = travel_times(s, arm, "joint", elbow=1)
@@ -228,14 +229,14 @@ def test_paper_model_reduces_on_translation(k: float) -> None:
     cl = arm.cartesian_limits
     base = builtin_case("square20", arm)
     # Constant tool angles: pure translation, t = (1 - 2k) d / Kv + 2 Kv / Ka.
-    s = SubtaskSet(base.points, theta=np.full(len(base), 0.3))
+    s = Targets(base.points, theta=np.full(len(base), 0.3))
     m = travel_times(s, arm, "paper", k=k).matrix
     d = np.hypot(*(s.points[:, None] - s.points[None]).transpose(2, 0, 1))
     off = ~np.eye(len(s), dtype=bool)
     np.testing.assert_allclose(m[off], ((1 - 2 * k) * d / cl.kv + 2 * cl.kv / cl.ka)[off],
                                rtol=1e-12)
     # Given tool angles with almost no translation: the rotation terms take over.
-    s2 = SubtaskSet([[0.1, 0.05], [0.1 + 1e-7, 0.05], [0.1, 0.05 + 1e-7]],
+    s2 = Targets([[0.1, 0.05], [0.1 + 1e-7, 0.05], [0.1, 0.05 + 1e-7]],
                     theta=[0.0, 2.0, -1.0])
     m2 = travel_times(s2, arm, "paper", k=k).matrix
     assert m2[0, 1] == pytest.approx((1 - 2 * k) * 2.0 / cl.kw + 2 * cl.kw / cl.kw_dot, rel=1e-6)
@@ -284,10 +285,10 @@ def test_travel_times_bad_parameters(kwargs: dict, match: str) -> None:
 
 def test_travel_times_unreachable_subtask() -> None:
     arm = _arm("asr_twodof")
-    s = SubtaskSet([[0.1, 0.05], [0.15, 0.0], [0.5, 0.5]])
+    s = Targets([[0.1, 0.05], [0.15, 0.0], [0.5, 0.5]])
     with pytest.raises(UnreachableError, match=r"subtask 2 at \(0.5, 0.5\) is beyond"):
         travel_times(s, arm)
-    with pytest.raises(ParameterError, match="SubtaskSet"):
+    with pytest.raises(ParameterError, match="Targets"):
         travel_times(np.zeros((3, 2)), arm)  # type: ignore[arg-type]
 
 
@@ -301,7 +302,7 @@ def test_leg_ratio_matches_pinocchio_jacobian() -> None:
     """Same samples, q_dot by Pinocchio's Jacobian and numpy's solver."""
     arm = _arm("asr_twodof")
     cl, vel = arm.cartesian_limits, arm.joint_limits.velocity
-    s = SubtaskSet([[0.15, 0.05], [0.1, 0.15], [0.2, -0.05]])
+    s = Targets([[0.15, 0.05], [0.1, 0.15], [0.2, -0.05]])
     n = 40
     res = travel_times(s, arm, "trapezoid", n_samples=n)
     lc = res.leg_check
@@ -327,7 +328,7 @@ def test_leg_ratio_matches_finite_differences() -> None:
     """Drive the leg in time: q(t) by IK along the trapezoid, q_dot by central differences."""
     arm = _arm("asr_twodof")
     cl, vel = arm.cartesian_limits, arm.joint_limits.velocity
-    s = SubtaskSet([[0.2, 0.0], [0.05, 0.12], [0.1, -0.12]], theta=[0.0, 0.0, 0.0])
+    s = Targets([[0.2, 0.0], [0.05, 0.12], [0.1, -0.12]], theta=[0.0, 0.0, 0.0])
     lc = travel_times(s, arm, "trapezoid", n_samples=4000).leg_check
     pi, pj = s.points[0], s.points[1]
     d = float(np.hypot(*(pj - pi)))
@@ -347,7 +348,7 @@ def test_leg_ratio_matches_finite_differences() -> None:
 def test_leg_check_flags_impossible_lines() -> None:
     arm = _arm("asr_twodof")
     b = arm.base_xy
-    s = SubtaskSet(b + np.array([
+    s = Targets(b + np.array([
         [0.1, 0.0],        # 0: in front
         [-0.1, 0.01],      # 1: behind: the line 0-1 crosses the inner disc
         [0.15 * math.cos(-1.92), 0.15 * math.sin(-1.92)],  # 2, 4: on elbow-down the
@@ -369,7 +370,7 @@ def test_leg_check_flags_impossible_lines() -> None:
 
 def test_leg_check_flags_branch_changes() -> None:
     arm = _arm("planar_2r")
-    s = SubtaskSet([[0.4, 0.1], [0.3, -0.2], [-0.545, -0.198]])
+    s = Targets([[0.4, 0.1], [0.3, -0.2], [-0.545, -0.198]])
     res = travel_times(s, arm, "trapezoid", elbow=0)
     assert res.configurations.tolist() == [0, 0, 1]
     lc = res.leg_check
@@ -406,7 +407,7 @@ def test_results_are_read_only() -> None:
 
 def test_explicit_configurations() -> None:
     arm = _arm("planar_2r")
-    s = SubtaskSet([[0.4, 0.1], [0.3, -0.2], [-0.545, -0.198]])
+    s = Targets([[0.4, 0.1], [0.3, -0.2], [-0.545, -0.198]])
     res = travel_times(s, arm, "joint", configurations=[1, 0, 1])
     assert res.configurations.tolist() == [1, 0, 1]
     np.testing.assert_allclose(res.joint_positions[0], arm.ik(s.points[0])[1])

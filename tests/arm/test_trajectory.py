@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
-from subtask_opt.arm.tasks import SubtaskSet, builtin_case, random_subtasks
+from subtask_opt.arm.targets import Targets
+from subtask_opt.arm.tasks import builtin_case, random_subtasks
 from subtask_opt.arm.trajectory import HOME, Trajectory, build_trajectory, validate
 from subtask_opt.base.errors import InputDataError, ParameterError
 from subtask_opt.kinematics.planar import JointLimits, load_planar_arm
@@ -31,7 +32,7 @@ def _solved(robot: str, case: str, model: str):
     configurations = "optimize" if model in ("joint", "line") else "fixed"
     subtasks = builtin_case(case, arm, seed=0)
     if REDUCED:  # the first 5 subtasks of the case: the same kinds of legs, fewer of them
-        subtasks = SubtaskSet(subtasks.points[:5], name=subtasks.name)
+        subtasks = Targets(subtasks.points[:5], name=subtasks.name)
     problem = PlanarProblem(subtasks, arm, time_model=model, configurations=configurations)
     return problem, solve(problem, seed=0)
 

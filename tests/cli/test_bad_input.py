@@ -280,10 +280,10 @@ def test_json_output_onto_the_input(part, capsys):
 
 
 def test_complex_subtasks():
-    from subtask_opt import SubtaskSet
+    from subtask_opt import Targets
 
     with pytest.raises(InputDataError):
-        SubtaskSet(np.array([[0.3 + 1j, 0.1], [0.35, 0.22], [0.25, 0.3]]))
+        Targets(np.array([[0.3 + 1j, 0.1], [0.35, 0.22], [0.25, 0.3]]))
 
 
 def test_matrix_problem_of_1e308():

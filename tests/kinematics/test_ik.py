@@ -281,7 +281,7 @@ def test_solve_refuses_bad_poses():
         solver.solve(np.full((4, 4), np.nan))
     with pytest.raises(ParameterError, match="one per target; got ndarray"):
         solver.solve_targets(np.eye(4)[None, None])  # one array, not a sequence of blocks
-    with pytest.raises(ParameterError, match="one per target; got PoseTargets"):
+    with pytest.raises(ParameterError, match="one per target; got Targets"):
         solver.solve_targets(make_targets(np.array([[0.4, 0.2, 0.3, 0, 0, -1.0]])))
     with pytest.raises(ParameterError, match="finite"):
         solver.solve_targets([np.full((1, 4, 4), np.nan)])

@@ -10,7 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from subtask_opt.arm.planar_problem import PlanarProblem, solve
-from subtask_opt.arm.tasks import SubtaskSet, random_subtasks
+from subtask_opt.arm.targets import Targets
+from subtask_opt.arm.tasks import random_subtasks
 from subtask_opt.base.errors import InputDataError, ParameterError, UnreachableError
 from subtask_opt.base.stop import MaxGenerations
 from subtask_opt.chromosomes import use
@@ -146,7 +147,7 @@ def test_a_subtask_with_one_configuration_gets_it() -> None:
     # (-0.545, -0.198) lies behind the base: the shoulder limit leaves only elbow-up.
     pts = np.array([[-0.545, -0.198], [0.3, 0.1], [0.4, -0.2], [0.25, 0.3]])
     assert np.isnan(arm.ik(pts[0])[0]).all() and np.isfinite(arm.ik(pts[0])[1]).all()
-    problem = PlanarProblem(SubtaskSet(pts), arm, time_model="joint",
+    problem = PlanarProblem(Targets(pts), arm, time_model="joint",
                             configurations="optimize")
     result = solve(problem, seed=0)
     assert result.report.configurations[0] == 1
@@ -158,7 +159,7 @@ def test_subtask_reachable_in_no_configuration_is_named() -> None:
     bx, by = arm.base_xy
     pts = np.array([[bx + 0.15, by], [bx, by + 0.15], [bx + 0.001, by]])  # inside the inner disc
     with pytest.raises(UnreachableError, match="subtask 2"):
-        PlanarProblem(SubtaskSet(pts), arm, time_model="joint", configurations="optimize")
+        PlanarProblem(Targets(pts), arm, time_model="joint", configurations="optimize")
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [

@@ -253,7 +253,7 @@ def arm_problem():
 
 
 def test_arm_home_point_matches_brute_force(arm_problem) -> None:
-    from subtask_opt.arm.tasks import SubtaskSet
+    from subtask_opt.arm.targets import Targets
 
     arm, subtasks = arm_problem
     home = (0.35, -0.05)
@@ -262,7 +262,7 @@ def test_arm_home_point_matches_brute_force(arm_problem) -> None:
     problem = PlanarProblem(subtasks, arm, time_model="trapezoid")
     result = solve(problem, seed=2, constraints=c)
     # the oracle: the same arm problem with the home built as an 8th row by hand
-    with_home = PlanarProblem(SubtaskSet(np.vstack([subtasks.points, home])), arm,
+    with_home = PlanarProblem(Targets(np.vstack([subtasks.points, home])), arm,
                               time_model="trapezoid")
     as_matrix = TourConstraints(home=7, precedence=c.precedence)
     assert result.total_time == pytest.approx(brute_force(with_home.matrix, as_matrix),

@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from subtask_opt.arm.tasks import SubtaskSet
+from subtask_opt.arm.targets import Targets, describe
 from subtask_opt.arm.timing import _line_kernels as _lk
 from subtask_opt.base.errors import (
     ParameterError,
@@ -357,7 +357,7 @@ def _explicit_configurations(configurations: Any, q_both: np.ndarray, points: np
     return configs
 
 
-def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k: float = 0.1,
+def travel_times(subtasks: Targets, arm: Arm, model: str = "trapezoid", *, k: float = 0.1,
                  elbow: int = 0, configurations: Any = None, check_legs: bool = True,
                  n_samples: int = 64, line_fallback: str = "joint",
                  line_grid: int | None = None) -> TimingResult:
@@ -390,8 +390,8 @@ def travel_times(subtasks: SubtaskSet, arm: Arm, model: str = "trapezoid", *, k:
     if model not in TIME_MODELS:
         raise ParameterError(
             f"unknown time model {model!r}: expected one of {', '.join(TIME_MODELS)}")
-    if not isinstance(subtasks, SubtaskSet):
-        raise ParameterError(f"subtasks must be a SubtaskSet, got {type(subtasks).__name__}")
+    if not (isinstance(subtasks, Targets) and subtasks.planar):
+        raise ParameterError(f"subtasks must be planar Targets, got {describe(subtasks)}")
     require_in_range("travel_times", "k", k, 0.0, 0.5)
     if k >= 0.5:
         raise ParameterError(f"travel_times.k must be < 0.5 (via-points would meet), got {k!r}")
