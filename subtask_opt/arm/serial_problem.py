@@ -158,7 +158,7 @@ class SerialProblem:
     targets (the given arm's own tool frame is not used).
         legs_mode: ``"dense"`` the (M, M) leg matrix; ``"sparse"`` candidate legs only
             (:mod:`subtask_opt.arm.sparse_legs`: dominated configurations dropped, at most
-            :data:`~subtask_opt.arm.sparse_legs.DEFAULT_CAP` + 1 per target, leg blocks
+            :func:`~subtask_opt.arm.sparse_legs.cap_for` + 1 per target, leg blocks
             between candidate targets, memory linear in the targets); ``"auto"`` (default)
             sparse above :data:`SPARSE_FROM` configurations.
             The only size limit is memory: a problem whose legs would not fit in the
@@ -407,8 +407,18 @@ def _legs_mode(problem: SerialProblem, params: IKParams) -> str:
     if problem.legs_mode == "dense":
         sl.check_memory(_dense_bytes(most))
     else:  # sparse, or auto (which goes sparse whenever the dense matrix would not fit)
-        sl.check_memory(sl.memory_estimate(most, len(targets)))
+        sl.check_memory(sl.memory_estimate(most, len(targets), cap=_cap(problem)))
     return problem.legs_mode
+
+
+def _cap(problem: SerialProblem) -> int:
+    """Configurations a target of ``problem`` keeps on candidate legs
+    (:func:`~subtask_opt.arm.sparse_legs.cap_for`)."""
+    from subtask_opt.arm import sparse_legs as sl
+
+    scene = problem.scene
+    obstacles = scene is not None and bool(scene.boxes or scene.meshes)
+    return sl.cap_for(len(problem.targets), obstacles)
 
 
 def _dense_bytes(m: int) -> int:
@@ -433,10 +443,9 @@ def _decide(mode: str, m: int) -> str:
 def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
                   cpu: dict[str, float]) -> None:
     """The candidate legs of :mod:`subtask_opt.arm.sparse_legs` into ``problem``: dominated
-    configurations dropped (exact), each target's best :data:`DEFAULT_CAP` kept (+ the
-    one nearest the home), those checked for collisions (a target whose kept ones all
-    collide checks the rest), leg blocks between candidate targets, the bound's inputs
-    over every configuration not dominated."""
+    configurations dropped (exact), the rest checked for collisions, the bound's inputs
+    over every free configuration, each target's best ``_cap(problem)`` free ones kept
+    (+ the one nearest the home), leg blocks between candidate targets."""
     from subtask_opt.arm import sparse_legs as sl
 
     lim = problem.limits
@@ -447,7 +456,7 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
     flat = np.ascontiguousarray(np.vstack(raw))
     assert problem.targets.poses is not None  # 3-D targets (SerialProblem checks them)
     points = np.array([p[0, :3, 3] for p in problem.targets.poses])
-    with _phase(cpu, "matrix"), _ticker("configurations: dominance, cap, bound legs"):
+    with _phase(cpu, "matrix"), _ticker("configurations: dominance"):
         rev = problem.arm.revolute
         canon = np.where(rev, np.mod(flat + math.pi, 2 * math.pi), flat).round(6)
         _, group = np.unique(canon, axis=0, return_inverse=True)
@@ -455,11 +464,8 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
         keep = ~drop
         home_all = joint_leg_times(home, flat, lim)[0]
         f1, o1, h1 = _subset(flat, offsets, keep, home_all)
-        bound = sl.bound_inputs(f1, o1, points, h1, lim, sl.reach_levers(problem.arm),
-                                k_bound=BOUND_NEIGHBOURS)
-        cap_keep = sl.keep_best(f1, o1, points, h1, lim, sl.DEFAULT_CAP)
     dropped = 0
-    if checker is not None:
+    if checker is not None:  # every configuration, so that the cap chooses among free ones
         from subtask_opt.base.progress import progress_bar
 
         t0 = time.process_time()
@@ -470,21 +476,20 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
             bar.update(1)
             check_time_limit(f"in the collision checks (target {t + 1} of {o1.shape[0] - 1})")
             rows = np.arange(o1[t], o1[t + 1])
-            first = rows[cap_keep[rows]]
-            free[first] = [not checker.in_collision(q) for q in f1[first]]
-            if not free[first].any():  # the cap's choice all collides: try the rest
-                rest = rows[~cap_keep[rows]]
-                free[rest] = [not checker.in_collision(q) for q in f1[rest]]
-                cap_keep[rest] = True
-                if not free[rows].any():
-                    point = np.round(problem.targets.points[t], 6).tolist()
-                    raise InputDataError(f"target {t} (row {t + 1}, point {point}) has no "
-                                         f"collision-free configuration (all {rows.size} "
-                                         "IK solutions collide)")
-            dropped += int((cap_keep[rows] & ~free[rows]).sum())
+            free[rows] = [not checker.in_collision(q) for q in f1[rows]]
+            if not free[rows].any():
+                point = np.round(problem.targets.points[t], 6).tolist()
+                raise InputDataError(f"target {t} (row {t + 1}, point {point}) has no "
+                                     f"collision-free configuration (all {rows.size} "
+                                     "IK solutions collide)")
         bar.close()
-        cap_keep &= free
+        dropped = int((~free).sum())
         cpu["collision"] += time.process_time() - t0
+        f1, o1, h1 = _subset(f1, o1, free, h1)
+    with _phase(cpu, "matrix"), _ticker("configurations: cap, bound legs"):
+        bound = sl.bound_inputs(f1, o1, points, h1, lim, sl.reach_levers(problem.arm),
+                                k_bound=BOUND_NEIGHBOURS)
+        cap_keep = sl.keep_best(f1, o1, points, h1, lim, _cap(problem))
     f2, o2, h2 = _subset(f1, o1, cap_keep, h1)
     check_time_limit(f"before the candidate legs of {o2.shape[0] - 1} targets")
     with _phase(cpu, "matrix"), _ticker(f"candidate legs of {o2.shape[0] - 1} targets"):
@@ -504,7 +509,7 @@ def _build_sparse(problem: SerialProblem, solutions: Any, checker: Any,
                         ("_cheapest", empty), ("dropped_in_collision", dropped),
                         ("_legs_memory", empty), ("sparse", data), ("bound_inputs", bound),
                         ("dropped_dominated", int(drop.sum())),
-                        ("dropped_by_cap", int(f1.shape[0] - cap_keep.sum() - dropped))):
+                        ("dropped_by_cap", int(f1.shape[0] - cap_keep.sum()))):
         object.__setattr__(problem, name, value)
 
 

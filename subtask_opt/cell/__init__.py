@@ -1,2 +1,2 @@
-"""The robot's cell: obstacles and tools (boxes, cylinders, spheres, STL/OBJ meshes), the
-collision checks of configurations and legs, and the detours planned around obstacles."""
+"""The robot's cell: obstacles and a tool (boxes and STL/OBJ meshes), the collision checks
+of configurations and swept legs, and the detours planned around obstacles."""

@@ -128,6 +128,42 @@ def test_memory_check_refuses_before_work():
     sl.check_memory(10, limit=2**30)
 
 
+def test_among_obstacles_the_cap_keeps_more_configurations_of_fewer_targets():
+    assert sl.cap_for(50, False) == sl.DEFAULT_CAP == sl.cap_for(10**6, True)
+    assert sl.cap_for(50, True) == sl.CONFIGURATION_BUDGET // 50 > sl.DEFAULT_CAP
+    caps = [sl.cap_for(n, True) for n in range(1, 3000, 7)]
+    assert caps == sorted(caps, reverse=True) and min(caps) == sl.DEFAULT_CAP
+    # the memory check counts the configurations a cap keeps
+    assert sl.memory_estimate(10**5, 50, cap=sl.cap_for(50, True)) > sl.memory_estimate(10**5, 50)
+
+
+def test_sparse_cell_keeps_only_free_configurations_and_counts_the_rest():
+    """The UR5 example cell on candidate legs: every kept configuration is collision-free
+    by the cell's checker, each target keeps at most cap_for(N) + 1, and the kept,
+    collided and capped configurations add up to the non-dominated IK solutions."""
+    from pathlib import Path
+
+    from subtask_opt.arm.poses import load_targets
+    from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
+    from subtask_opt.cell.scene import Scene
+
+    data = Path(__file__).resolve().parents[2] / "examples" / "data"
+    targets = load_targets(data / "ur5_panel.csv", standoff=0.01)
+    arm = load_serial_arm("ur5")
+    home = np.radians([0.0, -90.0, 90.0, -90.0, -90.0, 0.0])
+    problem = SerialProblem(targets, arm, home, scene=Scene.load(data / "ur5_panel_scene.json"),
+                            legs_mode="sparse")
+    assert all(not problem.checker.in_collision(q) for q in problem.flat)
+    assert int(problem.counts.max()) <= sl.cap_for(len(targets), True) + 1
+    solver = IKSolver(problem.arm, IKParams(wrap_alternatives=False))  # SerialProblem's
+    solutions = solver.solve_targets(targets.poses)
+    assert (problem.offsets[-1] + problem.dropped_in_collision + problem.dropped_by_cap
+            + problem.dropped_dominated) == sum(solutions.counts)
+    result = solve_serial_problem(problem, seed=0)
+    assert sorted(result.order.tolist()) == list(range(len(targets)))
+    assert result.lower_bound <= result.report.planned_time * (1 + 1e-9)
+
+
 def test_sparse_problem_matches_dense_on_a_small_panel(ur10):
     """The same 30 holes with the dense matrix and the candidate legs, the same seed: the
     sparse answer is no longer than the dense one by more than 0.5%, both above the
