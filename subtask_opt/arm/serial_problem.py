@@ -833,10 +833,10 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
                   certify: bool) -> Result:
     """:func:`solve_serial_problem` on candidate legs (:mod:`subtask_opt.tour.sparse`): the
     iterated local search (each kick counts as a generation for ``stop``), the lazy leg
-    check (a leg in collision is marked with the penalty by :meth:`SerialProblem.mark_leg`
-    and the search resumes from the same tour), legs between targets that are not
-    candidates added when an answer uses one, and the sparse 1-tree bound. Legs in
-    collision are not planned around here (the report's ``counts["detours"]`` is False)."""
+    check (a leg in collision is marked by :meth:`SerialProblem.mark_leg` with its
+    detour's time, planned as on the dense matrix within the detour budget, or with the
+    penalty, and the search resumes from the same tour), legs between targets that are
+    not candidates added when an answer uses one, and the sparse 1-tree bound."""
     from subtask_opt.base.progress import progress_bar
     from subtask_opt.base.results import History
     from subtask_opt.base.stop import MaxGenerations, NoImprovement, Progress
@@ -853,10 +853,16 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
     if certify:
         raise ParameterError("certify: the branch and cut needs the dense leg matrix; use "
                              "legs_mode='dense' (small problems)")
+    from subtask_opt.cell.detour import DetourParams, plan_detour
+
     n = problem.size
     cpu = dict(problem.cpu)
     cpu["search"] = 0.0
     cpu["bound"] = 0.0
+    cpu["planner"] = 0.0
+    detour_params = problem.detour if problem.detour is not None else DetourParams()
+    detours: dict[tuple[int, int], Detour] = {}  # legs in collision planned around (lo, hi)
+    plans = 0
     kicks = SPARSE_KICKS_PER_TARGET * n + 1000
     criteria = as_criteria(stop, [NoImprovement(SPARSE_STALL), MaxGenerations(kicks)])
     for c in criteria:
@@ -916,12 +922,26 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
                 for a, b in zip(flat_tour[:-1], flat_tour[1:], strict=True):
                     key = (min(a, b), max(a, b))
                     if key not in checked_legs:
-                        qa = problem.home if a < 0 else problem.flat[a]
-                        qb = problem.home if b < 0 else problem.flat[b]
+                        q_lo = problem.home if key[0] < 0 else problem.flat[key[0]]
+                        q_hi = problem.flat[key[1]]
                         checked_legs[key] = problem.checker.leg_in_collision(
-                            qa, qb, problem.clearance)
+                            q_lo, q_hi, problem.clearance)
                         if checked_legs[key]:
-                            problem.mark_leg(a, b, problem.penalty)
+                            cost = problem.penalty  # forbidden, unless planned around
+                            if problem.detours and plans < detour_params.max_plans:
+                                plans += 1
+                                tp = time.process_time()
+                                found = plan_detour(problem.checker, q_lo, q_hi,
+                                                    clearance=problem.clearance,
+                                                    limits=problem.limits,
+                                                    jerk=problem.arm.limits.jerk, seed=seed,
+                                                    params=detour_params, attempts=1)
+                                cpu["planner"] += time.process_time() - tp
+                                tc += time.process_time() - tp
+                                if found is not None:
+                                    detours[key] = found
+                                    cost = found.planned_time
+                            problem.mark_leg(a, b, cost)
                             repair = True
                 cpu["collision"] += time.process_time() - tc
             if not repair:
@@ -943,6 +963,9 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
         cpu["bound"] += time.process_time() - tb
     cpu["bound"] -= compiled[0]
     chosen, _path, planned, executed = _tour_legs(problem, order, index, False)
+    nodes = [-1] + [int(problem.offsets[t] + index[t]) for t in order] + [-1]
+    _refine_detours(problem, nodes, detours, detour_params, seed, cpu)
+    waypoints = _detour_legs(nodes, detours, planned, executed)
     counts = {
         "targets": n,
         "configurations_per_target": [int(k) for k in problem.counts],
@@ -953,10 +976,11 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
         "candidate_legs": int(problem.sparse.legs.size),
         "legs_checked": len(checked_legs),
         "legs_infeasible": int(sum(checked_legs.values())),
-        "legs_detoured": 0,
-        # candidate legs are not planned around obstacles: a leg in collision is forbidden,
-        # as with detours=False, and the summary says "detours off"
-        "detours": False,
+        "legs_planned": plans,
+        "legs_plan_found": len(detours),
+        "legs_detoured": len(waypoints),
+        "detours": problem.detours,
+        "plan_budget": detour_params.max_plans if problem.detours else 0,
         "search_rounds": rounds,
         "ga_rounds": 0,
         "kicks": done_total,
@@ -966,7 +990,7 @@ def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverPa
                           planned_leg_times=planned, total_time=float(executed.sum()),
                           collision_checked=problem.checker is not None, counts=counts,
                           cpu=cpu, generations=done_total, restarts=0, seed=seed,
-                          open_path=False, problem=problem)
+                          open_path=False, problem=problem, detours=waypoints)
     best = np.array(history_cost) if history_cost else np.array([out.cost])
     history = History(float(best[0]), best, best.copy())
     return Result(order=order, total_time=float(executed.sum()), leg_times=executed,
@@ -1303,17 +1327,7 @@ def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
         raise SubtaskOptError(f"internal error: the answer breaks its constraints: {broken}")
     chosen, path, planned, executed = _tour_legs(problem, order, index, open_path)
     nodes = [-1] + [int(off[t] + index[t]) for t in order] + ([] if open_path else [-1])
-    t0 = time.process_time()
-    for a, b in zip(nodes[:-1], nodes[1:], strict=True):  # the answer's detours, refined
-        key = (min(a, b), max(a, b))
-        if key in detours and detour_params.attempts > 1 and problem.checker is not None:
-            better = plan_detour(problem.checker, detours[key].waypoints[0],
-                                 detours[key].waypoints[-1], clearance=problem.clearance,
-                                 limits=problem.limits, jerk=problem.arm.limits.jerk,
-                                 seed=seed, params=detour_params)
-            if better is not None and better.executed_time < detours[key].executed_time:
-                detours[key] = better
-    cpu["planner"] += time.process_time() - t0
+    _refine_detours(problem, nodes, detours, detour_params, seed, cpu)
     waypoints = _detour_legs(nodes, detours, planned, executed)
     counts = {
         "targets": n,
@@ -1419,6 +1433,26 @@ def _near(problem: SerialProblem, k: int) -> np.ndarray:
     closeness[:n, :n] = problem.dist
     closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(problem.home_out, off[:-1])
     return neighbour_table(closeness, k)
+
+
+def _refine_detours(problem: SerialProblem, nodes: list[int],
+                    detours: dict[tuple[int, int], Detour], params: DetourParams, seed: int,
+                    cpu: dict[str, float]) -> None:
+    """Plan the detours of the answer through ``nodes`` again with ``params.attempts``
+    attempts, keeping the faster (the search planned each with one)."""
+    from subtask_opt.cell.detour import plan_detour
+
+    t0 = time.process_time()
+    for a, b in zip(nodes[:-1], nodes[1:], strict=True):
+        key = (min(a, b), max(a, b))
+        if key in detours and params.attempts > 1 and problem.checker is not None:
+            better = plan_detour(problem.checker, detours[key].waypoints[0],
+                                 detours[key].waypoints[-1], clearance=problem.clearance,
+                                 limits=problem.limits, jerk=problem.arm.limits.jerk,
+                                 seed=seed, params=params)
+            if better is not None and better.executed_time < detours[key].executed_time:
+                detours[key] = better
+    cpu["planner"] += time.process_time() - t0
 
 
 def _detour_legs(nodes: list[int], detours: dict[tuple[int, int], Detour],

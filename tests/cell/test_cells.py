@@ -279,6 +279,35 @@ def test_detours_are_taken_and_never_lengthen_the_tour(solved) -> None:
     assert len(legs) == counts["legs_detoured"]
 
 
+def test_candidate_legs_plan_detours_too(cell) -> None:
+    """The same cell on candidate legs (legs_mode "sparse"): the legs in collision the
+    search meets are planned around the pillar as on the dense matrix, the tour is
+    shorter than with them forbidden, and its trajectory validates (collisions included)."""
+    import subtask_opt as so
+    from subtask_opt.arm.problem import load_robot, load_targets
+    from subtask_opt.arm.serial_problem import SerialProblem, solve_serial_problem
+    from subtask_opt.cell.detour import DetourParams
+
+    robot = load_robot("ur5")
+    targets = load_targets(cell.parent / "holes.csv", standoff=STANDOFF, axis_step=45.0)
+    out = {}
+    for detours in (True, False):
+        problem = SerialProblem(targets, robot.model, HOME, scene=Scene.load(cell),
+                                detours=detours, legs_mode="sparse",
+                                detour=DetourParams(max_plans=20, attempts=2) if detours
+                                else None)
+        out[detours] = solve_serial_problem(problem, seed=3)
+    counts = out[True].report.counts
+    assert counts["detours"] and counts["legs_detoured"] >= 1 and counts["legs_planned"] <= 20
+    assert out[False].report.counts["legs_detoured"] == 0
+    assert out[True].total_time < out[False].total_time
+    trajectory = so.trajectory(out[True])
+    assert len([leg for leg in trajectory.legs if leg.kind == "detour"]) == counts[
+        "legs_detoured"]
+    assert so.validate(trajectory).ok
+    assert "detoured" in out[True].summary() and "detours off" in out[False].summary()
+
+
 def test_same_seed_same_detoured_tour(solved) -> None:
     import subtask_opt as so
 
