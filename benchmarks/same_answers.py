@@ -4,10 +4,10 @@
     python benchmarks/same_answers.py compare A B     # diff two recordings, timings ignored
 
 The command set covers every CLI command the README shows and every built-in case, map,
-world and scenario, planar tour shapes (open paths, fixed ends, a home, precedence) and
-serial arms (a UR5 in its box cell, the VS060 on RoboTSP's drilling subset when
-``../shared/data`` is there). Keys that hold wall-clock measurements (``runtime*``,
-``*seconds``, ``*_ms``, ``compile*``, ``cpu*``) are dropped before comparing.
+world and scenario, planar and serial tour shapes (open paths, fixed ends, a home,
+precedence, runs) and serial arms (a UR5 in its box cell, the VS060 on RoboTSP's
+drilling subset when ``../shared/data`` is there). Keys that hold wall-clock measurements
+(``runtime*``, ``*seconds``, ``*_ms``, ``compile*``, ``cpu*``) are dropped before comparing.
 
 Every command but a serial arm's must give equal values for every key the older recording
 has, nested keys included (keys added since are listed, not failed). A serial arm's
@@ -63,6 +63,14 @@ def commands() -> dict[str, list[str]]:
            "--home", "0,-90,90,-90,-90,0"]
     for seed in (0, 1, 2):
         cmds[f"{SERIAL_PREFIX}ur5-{seed}"] = [*ur5, "--seed", str(seed)]
+    # the tour shapes on a serial arm (the UR5 case has 20 holes; PRECEDENCE's pairs are
+    # within them)
+    cmds[f"{SERIAL_PREFIX}ur5-open"] = [*ur5, "--seed", "0", "--tour", "open"]
+    cmds[f"{SERIAL_PREFIX}ur5-open-end"] = [*ur5, "--seed", "0", "--tour", "open", "--first",
+                                           "4", "--end", "9"]
+    cmds[f"{SERIAL_PREFIX}ur5-precedence"] = [*ur5, "--seed", "0", "--precedence",
+                                             str(PRECEDENCE)]
+    cmds[f"{SERIAL_PREFIX}ur5-runs"] = [*ur5, "--seed", "0", "--runs", "3"]
     cmds[f"{SERIAL_PREFIX}ur5-noscene"] = ["solve", "--robot", "ur5", "--case", str(UR5_CASE),
                                           "--home", "0,-90,90,-90,-90,0", "--seed", "0"]
     if ROBOTSP.is_dir():

@@ -258,6 +258,19 @@ def compile_seconds() -> Iterator[list[float]]:
     spent.append(listener.seconds)
 
 
+@contextmanager
+def compile_apart(cpu: dict[str, float]) -> Iterator[list[float]]:
+    """numba's compilation inside the block into ``cpu["compile"]`` (a first run's
+    compile is not the work of the phase around it); the yielded list receives those CPU
+    seconds, for the phase the block belongs to to leave out."""
+    t0 = time.process_time()
+    spent: list[float] = []
+    with compile_seconds() as compiled:
+        yield spent
+    spent.append(min(compiled[0], time.process_time() - t0))
+    cpu["compile"] = cpu.get("compile", 0.0) + spent[0]
+
+
 def clear() -> Path:
     """Remove every cached generation; return the folder that was cleared."""
     root = cache_root()

@@ -2,28 +2,19 @@
 
 A :class:`SerialProblem` is built once: every IK solution of every target
 (configurations in collision with the scene or the arm itself dropped), then
-the matrix of joint-space leg times between all configurations and the home
-configuration (the joint model, phase-synchronised: every joint on the straight
-joint-space line, time-optimal under the velocity, acceleration and, where the arm has
-them, jerk limits, :func:`~subtask_opt.kinematics.joint_moves.joint_leg_times`).
-:func:`solve_serial_problem` searches the order and one configuration per target
-together (a generalised TSP on the shared micro-GA core, decoded exactly by a
-layered shortest path, :mod:`subtask_opt.tour.clustered`), tour
-home -> targets -> home.
+the legs between all configurations and the home configuration (the joint model,
+phase-synchronised: every joint on the straight joint-space line, time-optimal under the
+velocity, acceleration and, where the arm has them, jerk limits,
+:func:`~subtask_opt.kinematics.joint_moves.joint_leg_times`): the dense matrix, or above
+:data:`SPARSE_FROM` configurations the candidate legs of :mod:`subtask_opt.arm.sparse_legs`.
 
-Legs are checked for collisions lazily, as GLNS's lazy-edge search evaluates only the
-edges its best tour uses: the straight legs' times are lower bounds of every leg; every
-new best tour of the search has its legs not checked before swept
-(:meth:`~subtask_opt.cell.scene.CollisionChecker.leg_in_collision` with the problem's
-clearance); a leg in collision is planned around the obstacles
-(:func:`~subtask_opt.cell.detour.plan_detour`: OMPL's RRTConnect, simplified, timed
-through its waypoints) and its cost becomes the detour's time, or, when the planner fails
-or its budget (``DetourParams.max_plans`` per solve) is spent, or ``detours=False``, it is
-marked *infeasible* (a large finite penalty, so the GA avoids it). The GA evaluates its
-population again on the corrected costs and searches on, so its answer uses only
-verified legs (free straight legs and planned detours; in a cell so cluttered that this
-takes much of the plan budget, the answers' legs are checked after each search instead:
-:func:`solve_serial_problem`).
+:func:`solve_serial_problem` compiles it into the robot-free
+:class:`~subtask_opt.tour.lazy.LazyLegsProblem` (:meth:`SerialProblem.tour_problem`),
+whose lazy leg check is :class:`CellLegs` (the collision check and the detour planner),
+and solves it with :func:`subtask_opt.tour.solve.solve`, tour home -> targets -> home
+(or an open path from home). The straight legs' times are lower bounds of every leg;
+the search asks about the legs of its new best tours, and its answer uses verified legs
+only (free straight legs and planned detours).
 
 The result's ``leg_times`` and ``total_time`` are the *executed* times:
 ruckig's time-optimal profiles of the same straight lines with the arm's jerk limits
@@ -37,25 +28,17 @@ import contextvars
 import math
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from subtask_opt._kernel_cache import compile_seconds
+from subtask_opt._kernel_cache import compile_apart
 from subtask_opt.arm.report import ArmReport, TourLeg
-from subtask_opt.base.errors import (
-    InputDataError,
-    NoPathError,
-    ParameterError,
-    SubtaskOptError,
-    require_in_range,
-    require_int,
-)
-from subtask_opt.base.stop import Progress, StoppingCriterion, as_criteria, check_time_limit
-from subtask_opt.chromosomes import use
+from subtask_opt.base.errors import InputDataError, ParameterError, require_in_range
+from subtask_opt.base.stop import StoppingCriterion, check_time_limit
 from subtask_opt.kinematics.joint_moves import (
     JointLimits,
     joint_leg_square,
@@ -64,8 +47,10 @@ from subtask_opt.kinematics.joint_moves import (
     ruckig_leg_time,
 )
 from subtask_opt.tour import clustered as _gc
-from subtask_opt.tour.constraints import Canonical, TourConstraints
+from subtask_opt.tour.constraints import TourConstraints
+from subtask_opt.tour.lazy import LazyLegsProblem, LegVerifier
 from subtask_opt.tour.solve import Result
+from subtask_opt.tour.sparse import SparseLegs
 
 if TYPE_CHECKING:
     from subtask_opt.arm.targets import Targets
@@ -113,23 +98,10 @@ LEGS_MODES = ("auto", "dense", "sparse")
 
 
 @contextmanager
-def _compile_apart(cpu: dict[str, float]) -> Iterator[list[float]]:
-    """numba's compilation inside the block into ``cpu["compile"]`` (a first run's
-    compile is not IK, matrix or search work); the yielded list receives those CPU
-    seconds, for the phase the block belongs to to leave out."""
-    t0 = time.process_time()
-    spent: list[float] = []
-    with compile_seconds() as compiled:
-        yield spent
-    spent.append(min(compiled[0], time.process_time() - t0))
-    cpu["compile"] += spent[0]
-
-
-@contextmanager
 def _phase(cpu: dict[str, float], key: str) -> Iterator[None]:
-    """The block's CPU time into ``cpu[key]``, its compilation apart (:func:`_compile_apart`)."""
+    """The block's CPU time into ``cpu[key]``, its compilation apart (:func:`compile_apart`)."""
     t0 = time.process_time()
-    with _compile_apart(cpu) as compiled:
+    with compile_apart(cpu) as compiled:
         yield
     cpu[key] += time.process_time() - t0 - compiled[0]
 
@@ -164,9 +136,7 @@ class SerialProblem:
             The only size limit is memory: a problem whose legs would not fit in the
             available memory is refused before any IK.
 
-    The lazy leg check (after a search) reads and marks legs through :meth:`leg_time` and
-    :meth:`mark_leg` (flat configuration indices, -1 the home), which work for dense and
-    sparse legs alike.
+    :meth:`tour_problem` is what :func:`solve_serial_problem` solves.
 
     Built on construction (read-only): ``configurations`` (per target, (K_i, n)),
     ``offsets``, ``flat`` (M, n), ``legs`` (M, M, symmetric), ``home_out``/``home_in``
@@ -335,47 +305,18 @@ class SerialProblem:
                 value.setflags(write=False)
             object.__setattr__(self, name, value)
 
-    def leg_time(self, a: int, b: int) -> float:
-        """The planned time of the leg between flat configurations a and b (-1: the home),
-        as the search sees it (a leg marked by :meth:`mark_leg` has its marked time).
-        The interface of the lazy leg check, either legs_mode."""
-        if a < 0 and b < 0:
-            return 0.0
-        if a < 0 or b < 0:
-            return float(self.home_out[max(a, b)])
+    def tour_problem(self, verifier: LegVerifier | None = None) -> LazyLegsProblem:
+        """The robot-free problem :func:`subtask_opt.tour.solve.solve` searches: the
+        configurations its nodes (flat indices), the planned legs its legs (the dense
+        matrix, written in place by the search and restored, or the candidate legs, whose
+        blocks ``extend`` adds to this problem), ``verifier`` the lazy leg check."""
         if self.sparse is None:
-            return float(self._legs_memory[a, b])
-        from subtask_opt.tour.sparse import leg
-
-        ta, tb = (int(np.searchsorted(self.offsets, x, side="right") - 1) for x in (a, b))
-        return float(leg(self.sparse, ta, a - self.offsets[ta], tb, b - self.offsets[tb]))
-
-    def mark_leg(self, a: int, b: int, value: float) -> float:
-        """Set the leg between flat configurations a and b (-1: the home) to ``value``
-        both ways (``self.penalty``: infeasible; a detour's time: corrected); returns its
-        previous time. A sparse problem adds the targets' block first when it has none.
-        Home legs and dense legs are written in place (solve_serial_problem restores the
-        dense ones it marks before it returns)."""
-        old = self.leg_time(a, b)
-        if a < 0 or b < 0:
-            self.home_out.setflags(write=True)
-            self.home_out[max(a, b)] = value
-            self.home_out.setflags(write=False)
-            if self.sparse is not None:
-                self.sparse.home[max(a, b)] = value
-            return old
-        if self.sparse is None:
-            self._legs_memory[a, b] = self._legs_memory[b, a] = value
-            return old
-        off = self.offsets
-        ta, tb = (int(np.searchsorted(off, x, side="right") - 1) for x in (a, b))
-        _add_pairs(self, [(ta, tb)])
-        sp = self.sparse
-        for u, cu, v, cv in ((ta, a - off[ta], tb, b - off[tb]), (tb, b - off[tb], ta,
-                                                                  a - off[ta])):
-            slot = int(np.flatnonzero(sp.nbr[u] == v)[0])
-            sp.legs[sp.start[u, slot] + cu * (off[v + 1] - off[v]) + cv] = value
-        return old
+            return LazyLegsProblem(self.offsets, self.home_out, self.penalty,
+                                   legs=self._legs_memory, dist=self.dist,
+                                   cheapest=self._cheapest, verifier=verifier)
+        return LazyLegsProblem(self.offsets, self.home_out, self.penalty, sparse=self.sparse,
+                               bound_inputs=self.bound_inputs,
+                               extend=lambda pairs: _add_pairs(self, pairs), verifier=verifier)
 
     @property
     def size(self) -> int:
@@ -531,15 +472,15 @@ def _sparse_penalty(flat: np.ndarray, offsets: np.ndarray, home: np.ndarray,
     return (offsets.shape[0] + 2) * max(top, float(home.max())) + 1.0
 
 
-def _add_pairs(problem: SerialProblem, pairs: list[tuple[int, int]]) -> None:
+def _add_pairs(problem: SerialProblem, pairs: list[tuple[int, int]]) -> SparseLegs:
     """Add the leg blocks of target ``pairs`` to a sparse problem (the legs a search
-    asked for), keeping the legs already marked."""
+    asked for), keeping the legs already marked; returns the new candidate legs."""
     from subtask_opt.arm import sparse_legs as sl
 
     sp = problem.sparse
     new = [(a, b) for a, b in pairs if a != b and not np.any(sp.nbr[a] == b)]
     if not new:
-        return
+        return sp
     old = {(a, int(b)): s for a in range(sp.size) for s, b in enumerate(sp.nbr[a]) if b >= 0}
     data = sl.build_sparse(problem.flat, problem.offsets, sp.coords, sp.home, problem.limits,
                            extra=list(old) + new, k_task=0, k_joint=0, penalty=sp.penalty)
@@ -550,6 +491,7 @@ def _add_pairs(problem: SerialProblem, pairs: list[tuple[int, int]]) -> None:
         data.legs[data.start[a, t]:data.start[a, t] + size] = sp.legs[sp.start[a, s]:
                                                                       sp.start[a, s] + size]
     object.__setattr__(problem, "sparse", data)
+    return data
 
 
 @dataclass(frozen=True, eq=False)
@@ -691,77 +633,94 @@ class SerialReport(ArmReport):
         }
 
 
-MAX_ROUNDS = 200
-"""Most GA searches of the lazy leg check before :func:`solve_serial_problem` gives up."""
-MAX_REPAIRS = 100
 CLUTTERED_SHARE = 0.25
-"""A GA that checks its new bests' legs stops once they have taken more than this share of
-the plan budget (``DetourParams.max_plans``): the cell is cluttered, and the search starts
-again checking whole answers' legs (:func:`solve_serial_problem`)."""
+"""A search that verifies its new bests' legs gives that up once they have taken more than
+this share of the plan budget (``DetourParams.max_plans``): the cell is cluttered, and the
+search starts again verifying whole answers' legs (:meth:`CellLegs.crowded`)."""
+BOUND_NEIGHBOURS = 120
+"""Nearest pairs (task space) per target whose cheapest leg the sparse bound computes
+exactly (60 left a 2,000-hole panel's bound 9% lower: the closed-form bound of the
+other pairs is then below the tour's typical leg)."""
 
 
-class _Cluttered(Exception):
-    """Raised through the GA by its lazy leg check when the cell is cluttered."""
-"""Most repair rounds in a row before :func:`solve_serial_problem` runs the GA again."""
+class CellLegs(LegVerifier):
+    """The lazy-cost hook of a serial arm in its cell: a straight joint-space leg is swept
+    against the scene (:meth:`~subtask_opt.cell.scene.CollisionChecker.leg_in_collision`
+    with the problem's clearance); one in collision is planned around the obstacles
+    (:func:`~subtask_opt.cell.detour.plan_detour`: OMPL's RRTConnect, simplified, timed
+    through its waypoints, one attempt) and costs the detour's planned time, or, when the
+    planner fails, its budget (``DetourParams.max_plans`` per solve) is spent or detours
+    are off, is impossible.
+
+    Attributes:
+        detours: (lo, hi) flat indices (-1 the home) -> the detour planned for that leg.
+        plans: plans made so far.
+        cpu: CPU seconds of the collision checks (``collision``) and of the planner
+            (``planner``).
+    """
+
+    def __init__(self, problem: SerialProblem, seed: int) -> None:
+        from subtask_opt.cell.detour import DetourParams
+
+        assert problem.checker is not None
+        self.problem = problem
+        self.seed = seed
+        self.params = problem.detour if problem.detour is not None else DetourParams()
+        self.detours: dict[tuple[int, int], Detour] = {}
+        self.plans = 0
+        self.cpu = {"collision": 0.0, "planner": 0.0}
+
+    def verify(self, a: int, b: int) -> float | None:
+        from subtask_opt.cell.detour import plan_detour
+
+        p = self.problem
+        assert p.checker is not None
+        t0 = time.process_time()
+        q_lo = p.home if a < 0 else p.flat[a]
+        q_hi = p.flat[b]
+        collides = p.checker.leg_in_collision(q_lo, q_hi, p.clearance)
+        t1 = time.process_time()
+        self.cpu["collision"] += t1 - t0
+        if not collides:
+            return None
+        if not p.detours or self.plans >= self.params.max_plans:
+            return math.inf
+        self.plans += 1
+        detour = plan_detour(p.checker, q_lo, q_hi, clearance=p.clearance, limits=p.limits,
+                             jerk=p.arm.limits.jerk, seed=self.seed, params=self.params,
+                             attempts=1)
+        self.cpu["planner"] += time.process_time() - t1
+        if detour is None:
+            return math.inf
+        self.detours[(a, b)] = detour
+        return float(detour.planned_time)
+
+    def crowded(self) -> bool:
+        return self.problem.detours and self.plans > self.params.max_plans * CLUTTERED_SHARE
+
+    def forget(self) -> None:
+        self.detours.clear()
+        self.plans = 0
 
 
 def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
-                 stop: StoppingCriterion | list[StoppingCriterion] | None = None,
-                 params: SolverParams | None = None, kicks: int | None = None,
-                 constraints: TourConstraints | None = None, progress: bool = False,
-                 certify: bool = False, certify_time_limit: float = 60.0) -> Result:
+                         stop: StoppingCriterion | list[StoppingCriterion] | None = None,
+                         params: SolverParams | None = None,
+                         constraints: TourConstraints | None = None, progress: bool = False,
+                         certify: bool = False, certify_time_limit: float = 60.0) -> Result:
     """Order the targets and pick one configuration each for minimum time, from home.
 
-    The tour starts at the problem's home configuration and (``tour="closed"``, the
-    default) returns there, or (``tour="open"``) ends at its last target. With a home,
-    ``constraints.start`` is the first target and ``constraints.end`` the last one;
-    precedence pairs ``(a, b)`` put target a before b. A plain tour searches order and
-    configurations together (the clustered GA, decoded exactly by a layered shortest
-    path); precedence or a fixed first or last target use the pinned clustered GA
-    (:mod:`subtask_opt.tour.pinned_clustered`), which keeps every pair and chooses the
-    configurations exactly during the search.
-
-    The micro-GA (``stop``; default ``params.default_stop(n)``, see
-    :data:`SERIAL_KICKS`; ``params.runs`` independent runs, default one) checks the legs
-    lazily, GLNS-style, as it searches: the unchecked legs of every new best tour are swept
-    against the scene when it is found (``run_ga``'s ``on_best``); a leg in collision costs
-    its planned detour from then on, or is blocked, the population is evaluated again and
-    the search goes on knowing it, so its answer uses checked legs only.
-    In a cell so cluttered that those checks take more than :data:`CLUTTERED_SHARE` of the
-    plan budget (``DetourParams.max_plans``), the budget is better spent on whole answers'
-    legs: the search starts again with every leg unchecked, and the legs are checked after
-    each search instead. Then, when the answer uses a leg found in collision, that leg is
-    blocked and the same order is decoded again and polished by the local search (a repair
-    round: the blocked leg is usually replaced by another configuration of one of its
-    targets), until a tour uses no leg found in collision; the GA then runs once more from
-    scratch, knowing every leg found so far, and the shorter collision-free answer is kept.
-    The GA also runs again when a repair cannot avoid the blocked legs, or after
-    :data:`MAX_REPAIRS` repairs in a row.
+    The problem compiles into the robot-free :class:`~subtask_opt.tour.lazy.LazyLegsProblem`
+    (the configurations its nodes, the planned joint-move times its legs, the collision
+    check and detour planner its :class:`CellLegs` verifier) and
+    :func:`subtask_opt.tour.solve.solve` searches it (:func:`~subtask_opt.tour.lazy.solve_lazy`:
+    the tour shapes, precedence, the lazy leg check, the bound and the certificate). The
+    answer's detours are then planned again with ``DetourParams.attempts`` attempts (the
+    faster kept), and its legs driven by ruckig.
 
     The legs found in collision are blocked in the problem's leg matrix during the call
     (an M x M copy would cost as much as the search) and restored before it returns;
     concurrent calls on one problem wait for each other.
-
-    Every answer carries a lower bound: the Held-Karp bound of the cheapest planned leg
-    between every two targets (and home), which no tour's planned or executed time is
-    below (the planned legs are the executed ones to round-off).
-    ``certify`` proves a closed tour without precedence optimal for the planned times by
-    the generalised-TSP branch and cut over every configuration (small problems), or
-    says why not.
-
-    A problem on candidate legs (``problem.sparse``, legs_mode "sparse") is searched by
-    :func:`subtask_opt.tour.sparse.search` instead (an iterated local search: every kick
-    counts as one generation for ``stop``; default: :data:`SPARSE_STALL` kicks without
-    improvement or :data:`SPARSE_KICKS_PER_TARGET` kicks per target), with the same lazy
-    leg check through :meth:`SerialProblem.mark_leg`; its bound is
-    :func:`subtask_opt.tour.sparse.one_tree_bound`. Closed tours only; ``certify``,
-    ``kicks`` and the micro-GA's ``params`` do not apply there and are refused.
-
-    Args:
-        kicks: kicks of the iterated local search per child and restart individual
-            (:func:`subtask_opt.tour.permutation.make_aux`); None: its default for N
-            targets below ``KICKS_FROM``, :data:`SERIAL_KICKS` from there on (whose default
-            stall is then :data:`SERIAL_STALL_SHARE` of the solver's).
 
     Returns:
         A :class:`~subtask_opt.tour.solve.Result` whose ``leg_times``/``total_time`` are
@@ -769,670 +728,74 @@ def solve_serial_problem(problem: SerialProblem, *, seed: int = 0,
         order) and ``report`` the :class:`SerialReport` (planned times, counts).
 
     Raises:
-        ParameterError: a bad seed, params, kicks or constraints.
+        ParameterError: a bad seed, params or constraints, or options that do not apply.
         NoPathError: no tour avoids the legs found in collision.
     """
-    from subtask_opt.tour.solve import SolverParams
+    from subtask_opt.cell.detour import DetourParams
+    from subtask_opt.tour.solve import check_seed, solve
 
     if not isinstance(problem, SerialProblem):
         raise ParameterError(f"solve_serial_problem needs a SerialProblem, got "
                              f"{type(problem).__name__}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
-            0 <= seed < 2**63):
-        raise ParameterError(f"seed must be an integer in [0, 2**63), got {seed!r}")
-    params = params if params is not None else SolverParams()
-    if not isinstance(params, SolverParams):
-        raise ParameterError(f"solve_serial_problem: params must be a SolverParams, got {params!r}")
-    if kicks is not None:
-        require_int("solve_serial_problem", "kicks", kicks, 0, MAX_KICKS)
-    require_in_range("solve", "certify_time_limit", certify_time_limit, 1e-3, 86_400.0)
-    if problem.sparse is not None:
-        if kicks is not None:
-            raise ParameterError("kicks applies to the micro-GA of dense legs; a problem on "
-                                 "candidate legs (legs_mode 'sparse') has its own kicked search")
-        changed = [f for f in ("preset", "population", "convergence_tol", "grasp_share",
-                               "max_segment", "neighbours", "paper_loop", "runs", "bound_max_nodes")
-                   if getattr(params, f) != getattr(SolverParams(), f)]
-        if changed:
-            raise ParameterError(f"SolverParams.{changed[0]} applies to the micro-GA of dense "
-                                 "legs, not to a problem on candidate legs (legs_mode "
-                                 "'sparse')")
-        with problem._lock:
-            return _solve_sparse(problem, int(seed), stop, params, constraints, progress,
-                                 certify)
-    shape = _serial_shape(problem, constraints)
+    seed = check_seed(seed)
+    verifier = CellLegs(problem, seed) if problem.checker is not None else None
     with problem._lock:
-        blocked: dict[tuple[int, int], float] = {}  # leg (a, b), a < b -> its time
-        try:
-            return _search(problem, int(seed), stop, params, kicks, blocked, shape, progress,
-                           certify, certify_time_limit)
-        finally:
-            memory = problem._legs_memory
-            for (a, b), value in blocked.items():
-                memory[a, b] = memory[b, a] = value
-
-
-BOUND_NEIGHBOURS = 120
-"""Nearest pairs (task space) per target whose cheapest leg the sparse bound computes
-exactly (60 left a 2,000-hole panel's bound 9% lower: the closed-form bound of the
-other pairs is then below the tour's typical leg)."""
-SPARSE_STALL = 5000
-"""Kicks without a shorter tour after which the sparse search stops (its default stop,
-with :data:`SPARSE_KICKS_PER_TARGET` kicks per target in all)."""
-SPARSE_KICKS_PER_TARGET = 20
-SPARSE_REPAIR_KICKS = 2000
-"""Most kicks of a search round after legs were found in collision, every
-:data:`SPARSE_REPAIR_EVERY`-th such round (the others only polish: a round per handful of
-legs in collision would otherwise cost kicks each); the first round has the whole
-budget; ``stop`` applies to each round, a time limit to all of them."""
-SPARSE_REPAIR_EVERY = 10
-
-
-def _solve_sparse(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
-                  constraints: TourConstraints | None, progress: bool,
-                  certify: bool) -> Result:
-    """:func:`solve_serial_problem` on candidate legs (:mod:`subtask_opt.tour.sparse`): the
-    iterated local search (each kick counts as a generation for ``stop``), the lazy leg
-    check (a leg in collision is marked by :meth:`SerialProblem.mark_leg` with its
-    detour's time, planned as on the dense matrix within the detour budget, or with the
-    penalty, and the search resumes from the same tour), legs between targets that are
-    not candidates added when an answer uses one, and the sparse 1-tree bound."""
-    from subtask_opt.base.progress import progress_bar
-    from subtask_opt.base.results import History
-    from subtask_opt.base.stop import MaxGenerations, NoImprovement, Progress
-    from subtask_opt.tour import sparse as ts
-    from subtask_opt.tour.constraints import checked
-
-    cons = checked(constraints)
-    if cons.home is not None or cons.start is not None or cons.end is not None or (
-            cons.precedence or cons.tour != "closed"):
-        raise ParameterError("a problem on candidate legs (legs_mode 'sparse', more than "
-                             "SPARSE_FROM configurations) takes closed tours without a first "
-                             "or last target or precedence; use legs_mode='dense' or fewer "
-                             "configurations")
-    if certify:
-        raise ParameterError("certify: the branch and cut needs the dense leg matrix; use "
-                             "legs_mode='dense' (small problems)")
-    from subtask_opt.cell.detour import DetourParams, plan_detour
-
-    n = problem.size
+        found = solve(problem.tour_problem(verifier), seed=seed, stop=stop, params=params,
+                      constraints=constraints, progress=progress, certify=certify,
+                      certify_time_limit=certify_time_limit)
+    order = found.order
+    index = np.asarray(found.configurations, dtype=np.int64)
+    open_path = found.constraints.tour == "open"
     cpu = dict(problem.cpu)
-    cpu["search"] = 0.0
-    cpu["bound"] = 0.0
-    cpu["planner"] = 0.0
+    cpu["compile"] += found.cpu["compile"]
+    cpu["search"] = found.cpu["search"]
+    if "bound" in found.cpu:
+        cpu["bound"] = found.cpu["bound"]
+    detours = verifier.detours if verifier is not None else {}
+    if verifier is not None:
+        cpu["collision"] += verifier.cpu["collision"]
+    cpu["planner"] = verifier.cpu["planner"] if verifier is not None else 0.0
+    if "certify" in found.cpu:
+        cpu["certify"] = found.cpu["certify"]
     detour_params = problem.detour if problem.detour is not None else DetourParams()
-    detours: dict[tuple[int, int], Detour] = {}  # legs in collision planned around (lo, hi)
-    plans = 0
-    kicks = SPARSE_KICKS_PER_TARGET * n + 1000
-    criteria = as_criteria(stop, [NoImprovement(SPARSE_STALL), MaxGenerations(kicks)])
-    for c in criteria:
-        if isinstance(c, MaxGenerations):
-            kicks = c.generations
-    started = time.monotonic()
-    # per search round: its first kick, best time and the kick that found it (a repair
-    # round starts afresh: its tour holds legs just blocked, so it is longer than before)
-    state: dict[str, Any] = {"best": math.inf, "at": 0, "done": 0, "start": 0}
-
-    def should_stop() -> bool:
-        p = Progress(int(state["done"] - state["start"]), float(state["best"]),
-                     int(state["done"] - state["at"]),
-                     time.monotonic() - started)
-        return any(c(p) for c in criteria)
-
-    history_gen: list[int] = []
-    history_cost: list[float] = []
-    checked_legs: dict[tuple[int, int], bool] = {}
-    tour = choice = None
-    done_total = rounds = 0
-    t0 = time.process_time()
-    with _compile_apart(cpu) as compiled, progress_bar(progress, total=kicks,
-                                                       desc="search (kicks)",
-                                                       unit="kick") as bar:
-        while True:
-            rounds += 1
-            state.update(best=math.inf, at=done_total, start=done_total)
-            # after legs were found in collision: polish only (re-decode around the blocked
-            # legs), with kicks every SPARSE_REPAIR_EVERY rounds
-            budget = kicks if rounds == 1 else (
-                min(kicks, SPARSE_REPAIR_KICKS) if rounds % SPARSE_REPAIR_EVERY == 0 else 0)
-
-            def on_chunk(done: int, best: float, base: int = done_total) -> None:
-                if best < state["best"] - 1e-12:
-                    state["best"], state["at"] = best, base + done
-                    history_gen.append(base + done)
-                    history_cost.append(best)
-                bar.update(base + done - state["done"])
-                state["done"] = base + done
-                bar.set_postfix_str(f"best {best:.4f}")
-
-            out = ts.search(problem.sparse, seed=seed + rounds - 1,
-                            kicks=budget, tour=tour, choice=choice,
-                            should_stop=should_stop, on_chunk=on_chunk)
-            done_total += out.kicks
-            tour, choice = out.tour, out.choice
-            flat_tour = [-1 if t == n else int(problem.offsets[t] + choice[t]) for t in tour]
-            missing = [(int(a), int(b)) for a, b in zip(tour[1:-2], tour[2:-1], strict=True)
-                       if not np.any(problem.sparse.nbr[a] == b)]
-            if missing:  # the legs the search asked for: add them and search on
-                _add_pairs(problem, missing)
-                continue
-            repair = False
-            if problem.checker is not None:
-                tc = time.process_time()
-                for a, b in zip(flat_tour[:-1], flat_tour[1:], strict=True):
-                    key = (min(a, b), max(a, b))
-                    if key not in checked_legs:
-                        q_lo = problem.home if key[0] < 0 else problem.flat[key[0]]
-                        q_hi = problem.flat[key[1]]
-                        checked_legs[key] = problem.checker.leg_in_collision(
-                            q_lo, q_hi, problem.clearance)
-                        if checked_legs[key]:
-                            cost = problem.penalty  # forbidden, unless planned around
-                            if problem.detours and plans < detour_params.max_plans:
-                                plans += 1
-                                tp = time.process_time()
-                                found = plan_detour(problem.checker, q_lo, q_hi,
-                                                    clearance=problem.clearance,
-                                                    limits=problem.limits,
-                                                    jerk=problem.arm.limits.jerk, seed=seed,
-                                                    params=detour_params, attempts=1)
-                                cpu["planner"] += time.process_time() - tp
-                                tc += time.process_time() - tp
-                                if found is not None:
-                                    detours[key] = found
-                                    cost = found.planned_time
-                            problem.mark_leg(a, b, cost)
-                            repair = True
-                cpu["collision"] += time.process_time() - tc
-            if not repair:
-                break
-            if rounds >= MAX_ROUNDS:
-                raise NoPathError(f"legs in collision still in the best tour after {rounds} "
-                                  "searches")
-    t1 = time.process_time()
-    cpu["search"] += t1 - t0 - compiled[0]
-    if out.cost >= problem.penalty:
-        raise NoPathError(f"no tour avoids the legs in collision ({sum(checked_legs.values())} "
-                          f"legs of {len(checked_legs)} checked collide)")
-    order = tour[1:-1].astype(np.int64)
-    index = choice.astype(np.int64)
-    with _compile_apart(cpu) as compiled:
-        tb = time.process_time()
-        edges, weights, rho, home_min = problem.bound_inputs
-        bound = ts.one_tree_bound(n, edges, weights, rho, home_min, upper=out.cost)
-        cpu["bound"] += time.process_time() - tb
-    cpu["bound"] -= compiled[0]
-    chosen, _path, planned, executed = _tour_legs(problem, order, index, False)
-    nodes = [-1] + [int(problem.offsets[t] + index[t]) for t in order] + [-1]
-    _refine_detours(problem, nodes, detours, detour_params, seed, cpu)
-    waypoints = _detour_legs(nodes, detours, planned, executed)
-    counts = {
-        "targets": n,
-        "configurations_per_target": [int(k) for k in problem.counts],
-        "configurations": int(problem.offsets[-1]),
-        "dropped_in_collision": problem.dropped_in_collision,
-        "dropped_dominated": problem.dropped_dominated,
-        "dropped_by_cap": problem.dropped_by_cap,
-        "candidate_legs": int(problem.sparse.legs.size),
-        "legs_checked": len(checked_legs),
-        "legs_infeasible": int(sum(checked_legs.values())),
-        "legs_planned": plans,
-        "legs_plan_found": len(detours),
-        "legs_detoured": len(waypoints),
-        "detours": problem.detours,
-        "plan_budget": detour_params.max_plans if problem.detours else 0,
-        "search_rounds": rounds,
-        "ga_rounds": 0,
-        "kicks": done_total,
-    }
-    report = SerialReport(order=order, configuration_index=index, configurations=chosen,
-                          home=np.array(problem.home), leg_times=executed,
-                          planned_leg_times=planned, total_time=float(executed.sum()),
-                          collision_checked=problem.checker is not None, counts=counts,
-                          cpu=cpu, generations=done_total, restarts=0, seed=seed,
-                          open_path=False, problem=problem, detours=waypoints)
-    best = np.array(history_cost) if history_cost else np.array([out.cost])
-    history = History(float(best[0]), best, best.copy())
-    return Result(order=order, total_time=float(executed.sum()), leg_times=executed,
-                  matrix=np.zeros((0, 0)), generations=done_total, restarts=0,
-                  runtime_s=time.monotonic() - started, seed=seed, history=history,
-                  preset=params.preset, lower_bound=bound, certified=None, report=report,
-                  constraints=cons, start=None, runs=1, configurations=chosen, cpu=cpu)
-
-
-@dataclass(frozen=True)
-class _Shape:
-    """A serial tour's shape in canonical form: nodes 0..N-1 the targets, N the home."""
-
-    constraints: TourConstraints
-    canon: Canonical
-    closeness: np.ndarray  # (N + 1, N + 1) cheapest planned leg between targets and home
-
-    @property
-    def pinned(self) -> bool:
-        return self.canon.needs_pins
-
-
-def _serial_shape(problem: SerialProblem, constraints: TourConstraints | None) -> _Shape:
-    """Validate ``constraints`` for a tour from the problem's home and put them in
-    canonical form (a first or last target as precedence pairs, an open path's free
-    return to the home)."""
-    from subtask_opt.tour.constraints import canonical, checked
-
-    constraints = checked(constraints)
-    if constraints.home is not None:
-        raise ParameterError("a serial arm's tour starts at its home configuration: give it "
-                             "as ArmProblem(home=...) (--home q1,...,qn), not as "
-                             "TourConstraints.home")
-    n = problem.size
-    constraints.check_size(n, matrix_home=True, own_home=True)
-    pairs = list(constraints.precedence)
-    others = range(n)
-    if constraints.start is not None:
-        pairs += [(constraints.start, j) for j in others if j != constraints.start]
-    end = constraints.end
-    if end is not None and constraints.tour == "closed":
-        pairs += [(j, end) for j in others if j != end]
-        end = None
-    closeness = np.zeros((n + 1, n + 1))
-    closeness[:n, :n] = problem.dist
-    closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(problem.home_out,
-                                                              problem.offsets[:-1])
-    # the home is node N, where the canonical tour starts (a closed tour returns there,
-    # an open path's return is free)
-    canon_cons = TourConstraints(tour=constraints.tour, start=n, end=end,
-                                 precedence=tuple(dict.fromkeys(pairs)))
-    canon = canonical(closeness, canon_cons, default_start=n)
-    return _Shape(constraints, canon, closeness)
-
-
-MAX_KICKS = 1000
-"""Most kicks :func:`solve_serial_problem` accepts."""
-SERIAL_KICKS = 100
-"""Kicks per child of a serial arm's micro-GA from
-:data:`~subtask_opt.tour.permutation.KICKS_FROM` targets (the TSP default there is N/10,
-at most 100), with :data:`SERIAL_STALL_SHARE` of the default stall. On RoboTSP's 245 holes
-(seeds 0-7, the legs checked inside the GA): N/10 = 24 kicks and the whole stall (24) gave
-tours of median 63.34 s, mean 63.32 s, in a median 1.7 s of search CPU; 100 kicks and half
-the stall (12) 63.15 s, 63.25 s in 0.9 s; two thirds (16) 63.15 s, 63.20 s in 1.2 s; 20
-generations 63.12 s, 63.12 s in 1.7 s. (Checking the answers after each search and
-searching again, as before, 24 kicks and 24 gave 63.24 s, 63.26 s in 2.9 s.) Half keeps
-the search within a second or two at the old tours' length; a longer stall buys 0.1-0.2%."""
-SERIAL_STALL_SHARE = 0.5
-"""Share of :meth:`~subtask_opt.tour.solve.SolverParams.default_stop`'s stall a serial
-arm's micro-GA keeps from :data:`~subtask_opt.tour.permutation.KICKS_FROM` targets, whose
-children carry :data:`SERIAL_KICKS` kicks."""
-
-
-def _serial_search_defaults(params: SolverParams, n: int,
-                            kicks: int | None) -> tuple[list[Any], int | None]:
-    """The default stop and the kicks of a serial arm's micro-GA for ``n`` targets
-    (``kicks`` as given, else :data:`SERIAL_KICKS` from ``KICKS_FROM`` targets)."""
-    from subtask_opt.base.stop import NoImprovement
-    from subtask_opt.tour.permutation import KICKS_FROM
-
-    stop = params.default_stop(n)
-    if n < KICKS_FROM or params.preset == "paper":
-        return stop, kicks
-    stop = [NoImprovement(max(1, round(c.generations * SERIAL_STALL_SHARE)))
-            if isinstance(c, NoImprovement) else c for c in stop]
-    return stop, SERIAL_KICKS if kicks is None else kicks
-
-
-def _search(problem: SerialProblem, seed: int, stop: Any, params: SolverParams,
-            kicks: int | None, blocked: dict[tuple[int, int], float], shape: _Shape,
-            progress: bool, certify: bool, certify_time_limit: float) -> Result:
-    """:func:`solve_serial_problem`'s rounds; every leg it blocks in the problem's leg memory goes
-    into ``blocked`` with its time first."""
-    from subtask_opt.base.progress import progress_bar
-    from subtask_opt.base.results import History
-    from subtask_opt.base.stop import MaxGenerations, NoImprovement, TargetCost
-    from subtask_opt.ga.config import GAConfig
-    from subtask_opt.ga.kinds import Kind
-    from subtask_opt.ga.loop import run_ga
-    from subtask_opt.tour.permutation import (
-        SEARCH_EXACT,
-        SEARCH_FAST,
-        SEARCH_PAPER,
-        make_aux,
-        neighbour_table,
-    )
-    from subtask_opt.tour.pinned_clustered import make_data, make_pinned_clustered_aux
-    from subtask_opt.tour.problem import MatrixProblem
-    from subtask_opt.tour.solve import PINNED_STALL, _relaxation_bound, _rotate
-
-    n = problem.size
-    from subtask_opt.cell.detour import DetourParams, plan_detour
-
-    cpu = dict(problem.cpu)
-    cpu["search"] = 0.0
-    cpu["planner"] = 0.0
-    penalty = problem.penalty
-    search = SEARCH_PAPER if params.preset == "paper" else SEARCH_FAST
-    config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
-                      mutation_rate=0.0, restart_on_convergence=True,
-                      convergence_tol=params.convergence_tol)
+    chosen, _path, planned, executed = _tour_legs(problem, order, index, open_path)
     off = problem.offsets
-    checked: dict[tuple[int, int], bool] = {}  # (from, to) flat index, -1 = home -> collides
-    detours: dict[tuple[int, int], Detour] = {}  # legs in collision planned around (lo -> hi)
-    detour_params = problem.detour if problem.detour is not None else DetourParams()
-    planner = {"plans": 0}
-    generations = restarts = 0
-    rounds = ga_rounds = repairs = 0
-    t0 = time.process_time()
-    canon = shape.canon
-    open_path = canon.open_path
-    # the legs are symmetric, so a closed tour's search uses neighbour lists over targets +
-    # home; an open path's free return to the home is not, so it searches exactly
-    home_in = problem.home_in
-    if open_path:
-        home_in = np.zeros_like(problem.home_in)
-        search = SEARCH_PAPER if params.preset == "paper" else SEARCH_EXACT
-    data = _gc.ConfiguredData(problem.dist.copy(), off, problem._legs_memory,
-                              problem.home_out.copy(), home_in.copy(), float(search),
-                              (np.zeros((0, 0), dtype=np.int64) if open_path
-                               else _near(problem, params.neighbours)),
-                              np.zeros((0, 0)) if open_path else problem._cheapest)
-    bound = None
-    if n + 1 <= params.bound_max_nodes:
-        # every leg costs at least its targets' cheapest one, so a bound of the target
-        # matrix bounds every tour (and a tour that meets it is optimal)
-        bound = _relaxation_bound(MatrixProblem(shape.closeness), canon, canon.matrix)
-    history = History(math.inf, np.zeros(0), np.zeros(0))
-    runtime = 0.0
-    runs = 0
-    owner = np.repeat(np.arange(n), np.diff(off))
-    genes = np.zeros(n, dtype=np.int64)
-    aux = None
-    repair = False  # True: the last round blocked legs of the current order
-    again = False  # True: search once more knowing the legs found in collision
-    best: tuple[float, np.ndarray, np.ndarray] | None = None  # best collision-free answer
-    pinned_dist: list[np.ndarray] = []  # the pinned kind's target costs, kept like data.dist
-    plain_rounds = 0  # GA rounds that did not check legs as they went
-
-    def check_legs(tour: list[int]) -> bool:
-        """Check the legs of ``tour`` (flat configurations, -1 = home) not checked before;
-        one in collision costs its planned detour (within the budget) or the penalty from
-        now on (in ``data``, in place). Returns whether any was in collision."""
-        if problem.checker is None:
-            return False
-        found = False
-        t0 = time.process_time()
-        spent = 0.0  # CPU of the planner inside this loop (not collision checking)
-        for a, b in zip(tour[:-1], tour[1:], strict=True):
-            key = (min(a, b), max(a, b))
-            if key in checked:
-                continue  # verified before: its cost (straight, detour or penalty) is exact
-            q_lo = problem.home if key[0] < 0 else problem.flat[key[0]]
-            q_hi = problem.flat[key[1]]
-            checked[key] = problem.checker.leg_in_collision(q_lo, q_hi, problem.clearance)
-            if not checked[key]:
-                continue
-            found = True
-            cost = penalty
-            if problem.detours and planner["plans"] < detour_params.max_plans:
-                planner["plans"] += 1
-                t1 = time.process_time()
-                detour = plan_detour(problem.checker, q_lo, q_hi, clearance=problem.clearance,
-                                     limits=problem.limits, jerk=problem.arm.limits.jerk,
-                                     seed=seed, params=detour_params, attempts=1)
-                spent += time.process_time() - t1
-                if detour is not None:
-                    detours[key] = detour
-                    cost = detour.planned_time
-            if key[0] < 0:
-                data.home_out[key[1]] = cost
-                if not open_path:  # an open path's return to the home is free
-                    data.home_in[key[1]] = cost
-            else:
-                blocked.setdefault(key, float(data.legs[key]))
-                data.legs[a, b] = data.legs[b, a] = cost
-                ta, tb = owner[a], owner[b]
-                block = data.legs[off[ta]:off[ta + 1], off[tb]:off[tb + 1]]
-                data.dist[ta, tb] = data.dist[tb, ta] = block.min()
-                for costs in pinned_dist:
-                    costs[ta, tb] = costs[tb, ta] = data.dist[ta, tb]
-        cpu["collision"] += time.process_time() - t0 - spent
-        cpu["planner"] += spent
-        return found
-
-    in_ga = [0.0]  # CPU of the checks inside a GA round (not search time)
-
-    def check_best(chromosome: np.ndarray) -> bool:
-        """The GA's lazy leg check (``run_ga``'s ``on_best``) of a new best chromosome."""
-        t0 = time.process_time()
-        with compile_seconds() as compiled:  # counted apart already
-            order = (_rotate(chromosome, n)[1:] if shape.pinned
-                     else chromosome).astype(np.int64)
-            choice = np.zeros(n, dtype=np.int64)
-            _gc.decode(order, n, data, choice)
-            found = check_legs([-1] + [int(off[g] + choice[g]) for g in order]
-                               + ([] if open_path else [-1]))
-        spent = time.process_time() - t0
-        in_ga[0] += spent - min(compiled[0], spent)
-        if problem.detours and planner["plans"] > detour_params.max_plans * CLUTTERED_SHARE:
-            raise _Cluttered
-        return found
-
-    def forget_checks() -> None:
-        """Every leg back to its straight time, as before any check."""
-        for (a, b), value in blocked.items():
-            data.legs[a, b] = data.legs[b, a] = value
-        blocked.clear()
-        data.dist[:] = problem.dist
-        data.home_out[:] = problem.home_out
-        data.home_in[:] = home_in
-        checked.clear()
-        detours.clear()
-        planner["plans"] = 0
-
-    on_best = check_best if problem.checker is not None else None
-    cpu["search"] += time.process_time() - t0
-    while True:
-        rounds += 1
-        t0 = time.process_time()
-        choice = np.zeros(n, dtype=np.int64)
-        cost = math.inf
-        if n == 1 or (repair and repairs < MAX_REPAIRS):
-            repairs += 1
-            if aux is not None and not shape.pinned:  # the pinned order is kept as it is
-                _gc.local_search(genes, n, data, aux)
-            cost = float(_gc.decode(genes, n, data, choice))
-        if cost >= penalty and n > 1:  # the first or last search, or a repair that failed
-            if best is not None and (not again or ga_rounds >= MAX_ROUNDS):
-                break  # the collision-free answer found so far stands
-            if ga_rounds >= MAX_ROUNDS:
-                raise NoPathError(f"legs in collision still in the best tour after "
-                                  f"{ga_rounds} searches")
-            repairs = 0
-            again = False
-            default_stop, round_kicks = _serial_search_defaults(params, n, kicks)
-            aux = make_aux(neighbour_table(data.dist, params.neighbours),
-                           nearest_fallback=params.preset != "paper",
-                           grasp_share=params.grasp_share, max_segment=params.max_segment,
-                           neighbours=params.neighbours, search=search, kicks=round_kicks)
-            criteria = as_criteria(stop, default_stop)
-            if shape.pinned and stop is None and params.preset != "paper":
-                criteria = [NoImprovement(max(PINNED_STALL, n // 2)), MaxGenerations(50_000)]
-            if bound is not None and stop is None and ga_rounds == 0:
-                criteria = [*criteria, TargetCost(bound * (1 + 1e-12) + 1e-12)]
-            ga_rounds += 1
-            plain_rounds += on_best is None
-            in_ga[0] = 0.0
-            total = next((c.generations for c in criteria if isinstance(c, MaxGenerations)),
-                         None)
-            with _compile_apart(cpu) as compiled, progress_bar(
-                    progress, total=total, desc=f"micro-GA round {ga_rounds}",
-                    unit="gen") as bar:
-                on_chunk = _reporter(bar)
-                try:
-                    if shape.pinned:  # the order and the configurations together, pairs kept
-                        costs = np.array(canon.matrix)
-                        costs[:n, :n] = data.dist
-                        pinned = make_pinned_clustered_aux(n + 1, canon.first, canon.last,
-                                                           canon.pairs)
-                        pinned_data = make_data(costs, data, home=n)
-                        pinned_dist[:] = [pinned_data.dist]
-                        outcome = run_ga(use(Kind.PINNED_CLUSTERED), config, pinned_data,
-                                         pinned, max_genes=n + 1, seed=seed,
-                                         criteria=criteria, on_chunk=on_chunk,
-                                         runs=params.runs or 1, on_best=on_best)
-                        genes = _rotate(outcome.genes, n)[1:].astype(np.int64)
-                    else:
-                        outcome = run_ga(use(Kind.CONFIGURED_PERMUTATION), config, data, aux,
-                                         max_genes=n, seed=seed, criteria=criteria,
-                                         on_chunk=on_chunk, runs=params.runs or 1,
-                                         on_best=on_best)
-                        genes = outcome.genes.astype(np.int64)
-                except _Cluttered:
-                    outcome = None
-            t0 += compiled[0] + in_ga[0]  # not search time
-            if outcome is None:
-                # so cluttered a cell that the new bests' legs take much of the plan budget:
-                # it is better spent on whole answers' legs, so start again checking those
-                # after each search (repairs, then a second search knowing them)
-                forget_checks()
-                on_best = None
-                ga_rounds -= 1
-                cpu["search"] += time.process_time() - t0
-                continue
-            generations += outcome.generations
-            restarts += outcome.restarts
-            runtime += outcome.runtime_s
-            runs = outcome.runs  # per search (every round makes as many)
-            if ga_rounds == 1:
-                history = outcome.history
-            cost = float(_gc.decode(genes, n, data, choice))
-        cpu["search"] += time.process_time() - t0
-        tour = [-1] + [int(off[g] + choice[g]) for g in genes] + ([] if open_path else [-1])
-        if cost >= penalty and best is not None:
-            break  # a later search found nothing better than the collision-free answer
-        if cost >= penalty:
-            raise NoPathError(
-                f"no tour avoids the legs in collision ({sum(checked.values())} legs of "
-                f"{len(checked)} checked collide); try a larger axis step sampling, another "
-                "home or fewer obstacles")
-        repair = check_legs(tour)  # a cost of this tour was corrected: decode it again
-        if not repair:
-            if best is None or cost < best[0]:
-                best = (cost, genes.copy(), choice.copy())
-            if on_best is None and plain_rounds == 1 and any(checked.values()):
-                again = True
-                continue
-            break
-    assert best is not None  # the loop ends only after recording a collision-free answer
-    _, order, index = best
-    broken = canon.violations(np.concatenate([[n], order]))
-    if broken:  # the operators keep every constraint: this is a bug, never an answer
-        raise SubtaskOptError(f"internal error: the answer breaks its constraints: {broken}")
-    chosen, path, planned, executed = _tour_legs(problem, order, index, open_path)
     nodes = [-1] + [int(off[t] + index[t]) for t in order] + ([] if open_path else [-1])
     _refine_detours(problem, nodes, detours, detour_params, seed, cpu)
     waypoints = _detour_legs(nodes, detours, planned, executed)
-    counts = {
-        "targets": n,
+    counts: dict[str, Any] = {
+        "targets": problem.size,
         "configurations_per_target": [int(k) for k in problem.counts],
-        "configurations": int(problem.offsets[-1]),
+        "configurations": int(off[-1]),
         "dropped_in_collision": problem.dropped_in_collision,
-        "legs_checked": len(checked),
-        "legs_infeasible": int(sum(checked.values())),
-        "legs_planned": planner["plans"],
+    }
+    if problem.sparse is not None:
+        counts.update(dropped_dominated=problem.dropped_dominated,
+                      dropped_by_cap=problem.dropped_by_cap,
+                      candidate_legs=found.counts["candidate_legs"])
+    counts.update({
+        "legs_checked": found.counts["legs_checked"],
+        "legs_infeasible": found.counts["legs_infeasible"],
+        "legs_planned": verifier.plans if verifier is not None else 0,
         "legs_plan_found": len(detours),
         "legs_detoured": len(waypoints),
         "detours": problem.detours,
         "plan_budget": detour_params.max_plans if problem.detours else 0,
-        "search_rounds": rounds,
-        "ga_rounds": ga_rounds,
-    }
-    certified = None
-    if certify:
-        t0 = time.process_time()
-        certified = _certify_serial(problem, data, shape, order, index, float(planned.sum()),
-                                    certify_time_limit)
-        cpu["certify"] = time.process_time() - t0
+        "search_rounds": found.counts["search_rounds"],
+        "ga_rounds": found.counts["ga_rounds"],
+    })
+    if "kicks" in found.counts:
+        counts["kicks"] = found.counts["kicks"]
     report = SerialReport(order=order, configuration_index=index, configurations=chosen,
                           home=np.array(problem.home), leg_times=executed,
                           planned_leg_times=planned, total_time=float(executed.sum()),
                           collision_checked=problem.checker is not None, counts=counts,
-                          cpu=cpu, generations=generations, restarts=restarts, seed=seed,
-                          open_path=open_path, problem=problem, detours=waypoints)
-    return Result(order=order, total_time=float(executed.sum()), leg_times=executed,
-                  matrix=np.zeros((0, 0)), generations=generations, restarts=restarts,
-                  runtime_s=runtime, seed=seed, history=history, preset=params.preset,
-                  lower_bound=bound, certified=certified, report=report,
-                  constraints=shape.constraints, start=None, runs=max(runs, 1),
-                  configurations=chosen, cpu=cpu)
+                          cpu=cpu, generations=found.generations, restarts=found.restarts,
+                          seed=found.seed, open_path=open_path, problem=problem,
+                          detours=waypoints)
+    return replace(found, total_time=float(executed.sum()), leg_times=executed,
+                   report=report, configurations=chosen, cpu=cpu)
 
-
-def _certify_serial(problem: SerialProblem, data: Any, shape: _Shape, order: np.ndarray,
-                    index: np.ndarray, planned: float, time_limit: float) -> str:
-    """Prove the planned time optimal over every order and configuration, or say why not.
-
-    Up to :data:`~subtask_opt.tour.exact.CLUSTERED_HELD_KARP_MAX` targets, any shape:
-    Held and Karp's programme over (targets visited, configuration last visited),
-    precedence and a fixed first or last target kept. Larger closed tours without
-    precedence: the generalised-TSP branch and cut
-    (:func:`~subtask_opt.tour.exact.gtsp_optimum`, the home a cluster of one node).
-    Legs found in collision count as impossible (no feasible tour uses one)."""
-    from subtask_opt.tour.exact import CLUSTERED_HELD_KARP_MAX, clustered_held_karp, gtsp_optimum
-
-    canon = shape.canon
-    n = problem.size
-    m = int(problem.offsets[-1])
-    try:
-        if n <= CLUSTERED_HELD_KARP_MAX:
-            pairs = canon.pairs[(canon.pairs < n).all(axis=1)]
-            optimum = clustered_held_karp(
-                data.legs, problem.offsets, data.home_out,
-                None if canon.open_path else data.home_in, pairs=pairs,
-                last=canon.last if canon.last < n else -1)
-        elif canon.open_path or shape.pinned:
-            return (f"not certified: {n} targets; open paths, precedence and fixed first or "
-                    f"last targets are certified up to {CLUSTERED_HELD_KARP_MAX} targets")
-        elif m > MAX_CERTIFY_NODES:
-            return (f"not certified: {m} configurations; the branch and cut takes at most "
-                    f"{MAX_CERTIFY_NODES}")
-        else:
-            cost = np.zeros((m + 1, m + 1))
-            cost[:m, :m] = data.legs
-            cost[m, :m] = cost[:m, m] = data.home_out
-            owner = np.repeat(np.arange(n + 1), np.append(problem.counts, 1))
-            incumbent = [m] + [int(problem.offsets[t] + index[t]) for t in order]
-            optimum = gtsp_optimum(cost, owner, incumbent=incumbent,
-                                   time_limit=time_limit)[0]
-    except SubtaskOptError as exc:
-        return f"not certified: {exc}"
-    if planned <= optimum * (1 + 1e-9) + 1e-12:
-        return "optimal (proven, planned times)"
-    return (f"not optimal: the proven optimum of the planned times is {optimum:.6g} "
-            f"({100 * (planned / optimum - 1):.4f}% less)")
-
-
-MAX_CERTIFY_NODES = 3000
-"""Most configurations :func:`solve_serial_problem` hands its certificate's branch and cut."""
-
-
-def _reporter(bar: Any) -> Callable[[Progress], None]:
-    """A GA chunk callback that moves ``bar`` to the generation reached."""
-    done = [0]
-
-    def on_chunk(p: Progress) -> None:
-        bar.update(p.generation - done[0])
-        done[0] = p.generation
-        bar.set_postfix_str(f"best {p.best_cost:.4f}")
-    return on_chunk
-
-
-def _near(problem: SerialProblem, k: int) -> np.ndarray:
-    """(N + 1, k) nearest nodes of each target and home (node N) by their cheapest legs."""
-    from subtask_opt.tour.permutation import neighbour_table
-
-    n = problem.size
-    off = problem.offsets
-    closeness = np.zeros((n + 1, n + 1))
-    closeness[:n, :n] = problem.dist
-    closeness[n, :n] = closeness[:n, n] = np.minimum.reduceat(problem.home_out, off[:-1])
-    return neighbour_table(closeness, k)
 
 
 def _refine_detours(problem: SerialProblem, nodes: list[int],

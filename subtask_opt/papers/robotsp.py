@@ -153,25 +153,20 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
     ``peer_functions`` replaces peers by name (same contract as :mod:`subtask_opt.tour.peers`).
     """
     from subtask_opt.arm.poses import make_targets
-    from subtask_opt.arm.serial_problem import (
-        MAX_KICKS,
-        SerialProblem,
-        evaluate_tour,
-        solve_serial_problem,
-    )
+    from subtask_opt.arm.serial_problem import SerialProblem, evaluate_tour, solve_serial_problem
     from subtask_opt.arm.trajectory import from_serial_report, validate
     from subtask_opt.cell.scene import Scene
     from subtask_opt.kinematics.ik import IKParams
     from subtask_opt.kinematics.joint_moves import joint_leg_times
     from subtask_opt.kinematics.serial import load_serial_arm
-    from subtask_opt.tour.solve import SolverParams
+    from subtask_opt.tour.solve import MAX_KICKS, SolverParams
 
     stop: list[StoppingCriterion] | None = None
     if stall is not None:  # both checked before the problem is built
         stop = [NoImprovement(stall), MaxGenerations(50_000)]
     if kicks is not None:
         require_int("run_subset", "kicks", kicks, 0, MAX_KICKS)
-    params = SolverParams(runs=runs)
+    params = SolverParams(runs=runs, kicks=kicks)
     arm = load_serial_arm("vs060_drill", limits="robotsp")
     scene = Scene.load(data_dir / "obstacles.json")
     targets = make_targets(rows[indices], axis_step=45.0, standoff=0.01)
@@ -201,7 +196,7 @@ def run_subset(rows: np.ndarray, indices: list[int], *, data_dir: Path, seed: in
             "cpu_s": cpu,
             "cpu_total_s": float(sum(v for k, v in cpu.items() if k != "compile"))}
 
-    ours = solve_serial_problem(problem, seed=seed, stop=stop, kicks=kicks, params=params).report
+    ours = solve_serial_problem(problem, seed=seed, stop=stop, params=params).report
     record("ours", ours, dict(ours.cpu))
     out["methods"]["ours"]["counts"] = ours.counts
     out["methods"]["ours"]["legs_in_collision"] = evaluate_tour(

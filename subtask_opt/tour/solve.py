@@ -18,7 +18,7 @@ polished by local search. Every answer carries the Held-Karp lower bound (up to
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -77,7 +77,12 @@ from subtask_opt.tour.problem import (
     TourProblem,
 )
 
+if TYPE_CHECKING:
+    from subtask_opt.tour.lazy import LazyLegsProblem
+
 PRESETS = ("default", "paper")
+MAX_KICKS = 1000
+"""Most kicks per child :class:`SolverParams` accepts."""
 CONFIGURED_RUNS = 12
 """Independent runs of the default search when it chooses configurations below
 :data:`~subtask_opt.tour.permutation.KICKS_FROM` subtasks, each stalling two thirds as long
@@ -130,6 +135,11 @@ class SolverParams:
         runs: independent GA runs, each from a fresh population until the
             stop holds (see :func:`~subtask_opt.ga.loop.run_ga`), the best answer
             kept; None: :meth:`default_runs`.
+        kicks: (default preset, no precedence or fixed end) kicks of the iterated local
+            search per child and restart individual, in 0..:data:`MAX_KICKS`
+            (:func:`~subtask_opt.tour.permutation.make_aux`); None: its default for the
+            size (N/10, at most 100, from ``KICKS_FROM`` nodes; on lazily verified legs
+            :data:`~subtask_opt.tour.lazy.LAZY_KICKS`).
     """
 
     preset: str = "default"
@@ -141,6 +151,7 @@ class SolverParams:
     neighbours: int = 8
     paper_loop: GAConfig | None = None
     runs: int | None = None
+    kicks: int | None = None
 
     def __post_init__(self) -> None:
         if self.paper_loop is not None and not isinstance(self.paper_loop, GAConfig):
@@ -160,6 +171,11 @@ class SolverParams:
         require_int("SolverParams", "bound_max_nodes", self.bound_max_nodes, 0, MAX_NODES)
         if self.runs is not None:
             require_int("SolverParams", "runs", self.runs, 1, MAX_RUNS)
+        if self.kicks is not None:
+            require_int("SolverParams", "kicks", self.kicks, 0, MAX_KICKS)
+            if self.preset == "paper":
+                raise ParameterError("SolverParams.kicks applies to the default preset (the "
+                                     "paper's micro-GA has no local search)")
 
     @classmethod
     def paper(cls) -> SolverParams:
@@ -261,8 +277,12 @@ class Result:
             :class:`~subtask_opt.tour.problem.GtspProblem`; an arm problem's (N, n)
             joint vector of every target (input order); None for a matrix problem.
         cpu: CPU seconds per phase of an arm problem (``ik``, ``collision``,
-            ``matrix``, ``search``, and numba's ``compile`` apart); empty for a tour
-            problem.
+            ``matrix``, ``search``, and numba's ``compile`` apart); of a
+            :class:`~subtask_opt.tour.lazy.LazyLegsProblem`, its search's (``search``,
+            ``verify``, ``compile``); empty for another tour problem.
+        counts: what the lazy leg check of a
+            :class:`~subtask_opt.tour.lazy.LazyLegsProblem` did (legs checked, legs
+            corrected as ``legs_infeasible``, search rounds); empty otherwise.
         constraints: the tour shape and precedence the answer keeps
             (:class:`~subtask_opt.tour.constraints.TourConstraints`).
         start: the subtask the answer starts at (None with a home).
@@ -291,6 +311,7 @@ class Result:
     runs: int = 1
     configurations: np.ndarray | None = None
     cpu: dict[str, float] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
 
     @property
     def gap_bound(self) -> float | None:
@@ -355,7 +376,7 @@ class Result:
 
 
 
-def solve(problem: TourProblem, *, seed: int = 0,
+def solve(problem: TourProblem | LazyLegsProblem, *, seed: int = 0,
           stop: StoppingCriterion | list[StoppingCriterion] | None = None,
           params: SolverParams | None = None, progress: bool = False,
           certify: bool = False, certify_time_limit: float = 60.0,
@@ -389,18 +410,27 @@ def solve(problem: TourProblem, *, seed: int = 0,
             cluster's node exactly during the search (the bound is the one of the
             relaxation without precedence, so it stays valid).
     """
-    if not isinstance(problem, (MatrixProblem, ClusteredProblem, GtspProblem)):
-        raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem, GtspProblem or "
-                             f"ArmProblem, "
+    from subtask_opt.tour.lazy import LazyLegsProblem, solve_lazy
+
+    if not isinstance(problem, (MatrixProblem, ClusteredProblem, GtspProblem,
+                                LazyLegsProblem)):
+        raise ParameterError(f"solve needs a MatrixProblem, ClusteredProblem, GtspProblem, "
+                             f"LazyLegsProblem or ArmProblem, "
                              f"got {type(problem).__name__}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
-            0 <= seed < 2**63):
-        raise ParameterError(f"seed must be an integer in [0, 2**63), got {seed!r}")
+    check_seed(seed)
     if params is None:
         params = SolverParams()
     elif not isinstance(params, SolverParams):
         raise ParameterError(f"solve: params must be a SolverParams, got {params!r}")
+    require_in_range("solve", "certify_time_limit", certify_time_limit, 1e-3, 86_400.0)
+    if isinstance(problem, LazyLegsProblem):
+        return solve_lazy(problem, seed=int(seed), stop=stop, params=params,
+                          constraints=constraints, progress=progress, certify=certify,
+                          certify_time_limit=certify_time_limit)
     cons, problem, canon = _shaped(problem, constraints)
+    if params.kicks is not None and canon.needs_pins:
+        raise ParameterError("SolverParams.kicks applies to tours without precedence or a "
+                             "fixed end (the pinned search has no kicks)")
     configured = isinstance(problem, (ClusteredProblem, GtspProblem))
     criteria = as_criteria(stop, params.default_stop(problem.size, configured=configured))
     runs = params.default_runs(problem.size, configured=configured)
@@ -469,7 +499,7 @@ def solve(problem: TourProblem, *, seed: int = 0,
     else:
         aux = make_aux(neighbours, nearest_fallback=not paper,
                        grasp_share=params.grasp_share, max_segment=params.max_segment,
-                       neighbours=params.neighbours, search=search)
+                       neighbours=params.neighbours, search=search, kicks=params.kicks)
     config = GAConfig(population=params.population, elite=1, crossover_rate=1.0,
                       mutation_rate=0.0, restart_on_convergence=True,
                       convergence_tol=params.convergence_tol)
@@ -538,6 +568,14 @@ def solve(problem: TourProblem, *, seed: int = 0,
 
 
 
+def check_seed(seed: object) -> int:
+    """``seed`` as an int, or a :class:`ParameterError` naming it and the range."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not (
+            0 <= seed < 2**63):
+        raise ParameterError(f"seed must be an integer in [0, 2**63), got {seed!r}")
+    return int(seed)
+
+
 def _relaxation_bound(problem: TourProblem, canon: Canonical,
                       costs: np.ndarray) -> float:
     """A lower bound of the constrained problem: a bound of a relaxation without precedence.
@@ -587,7 +625,6 @@ def _certify(problem: TourProblem, canon: Canonical, total: float,
     """
     from subtask_opt.tour.exact import milp_optimum, milp_pinned
 
-    require_in_range("solve", "certify_time_limit", time_limit, 1e-3, 86_400.0)
     try:
         if configs is not None:
             if canon.open_path or canon.needs_pins:

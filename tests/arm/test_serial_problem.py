@@ -15,6 +15,7 @@ from subtask_opt.arm.trajectory import from_serial_report, validate
 from subtask_opt.base.errors import InputDataError, NoPathError, ParameterError
 from subtask_opt.cell.scene import Scene
 from subtask_opt.kinematics.serial import load_serial_arm
+from subtask_opt.tour.solve import SolverParams
 from tests.conftest import size
 
 HOME = np.radians([0, -90, 90, -90, -90, 0])
@@ -199,21 +200,21 @@ def test_bad_kicks_name_the_value(solved, kicks) -> None:
     problem, _ = solved
     with pytest.raises(ParameterError, match=rf"kicks must be an integer in \[0, 1000\], "
                                              rf"got {kicks!r}"):
-        solve_serial_problem(problem, kicks=kicks)
+        solve_serial_problem(problem, params=SolverParams(kicks=kicks))
 
 
 def test_kicks_zero_still_reaches_the_optimum(arm) -> None:
     problem = _small_problem(arm)
-    result = solve_serial_problem(problem, seed=1, kicks=0).report
+    result = solve_serial_problem(problem, seed=1, params=SolverParams(kicks=0)).report
     assert result.planned_time == pytest.approx(_brute_force(problem), rel=1e-9)
 
 
 def test_search_limit_keeps_the_answer_or_raises(arm, monkeypatch) -> None:
     """With one GA search allowed, its answer stands (collision-free: the GA checks its new
     bests); with no collision-free tour the limit raises."""
-    import subtask_opt.arm.serial_problem as serial_problem
+    import subtask_opt.tour.lazy as lazy
 
-    monkeypatch.setattr(serial_problem, "MAX_ROUNDS", 1)
+    monkeypatch.setattr(lazy, "MAX_ROUNDS", 1)
     problem = _small_problem(arm)
     path = solve_serial_problem(problem, seed=0).report.tour_configurations()[1:-1]
     checker = _BlockingChecker(list(zip(path[:-1], path[1:], strict=True)))
@@ -305,12 +306,8 @@ def test_executed_joint_moves_take_the_planned_time(phase: bool) -> None:
 
 
 def test_serial_search_defaults_from_kicks_from_targets() -> None:
-    from subtask_opt.arm.serial_problem import (
-        SERIAL_KICKS,
-        SERIAL_STALL_SHARE,
-        _serial_search_defaults,
-    )
     from subtask_opt.base.stop import NoImprovement
+    from subtask_opt.tour.lazy import LAZY_KICKS, LAZY_STALL_SHARE, _search_defaults
     from subtask_opt.tour.permutation import KICKS_FROM
     from subtask_opt.tour.solve import SolverParams
 
@@ -319,12 +316,12 @@ def test_serial_search_defaults_from_kicks_from_targets() -> None:
     def stall(criteria):
         return next(c.generations for c in criteria if isinstance(c, NoImprovement))
 
-    small, kicks = _serial_search_defaults(params, KICKS_FROM - 1, None)
+    small, kicks = _search_defaults(params, KICKS_FROM - 1)
     assert kicks is None and stall(small) == stall(params.default_stop(KICKS_FROM - 1))
     n = 2 * KICKS_FROM + 45
-    large, kicks = _serial_search_defaults(params, n, None)
-    assert kicks == SERIAL_KICKS
-    assert stall(large) == round(stall(params.default_stop(n)) * SERIAL_STALL_SHARE)
-    assert _serial_search_defaults(params, n, 7)[1] == 7  # given kicks are kept
+    large, kicks = _search_defaults(params, n)
+    assert kicks == LAZY_KICKS
+    assert stall(large) == round(stall(params.default_stop(n)) * LAZY_STALL_SHARE)
+    assert _search_defaults(SolverParams(kicks=7), n)[1] == 7  # given kicks are kept
     paper = SolverParams(preset="paper")
-    assert _serial_search_defaults(paper, n, None) == (paper.default_stop(n), None)
+    assert _search_defaults(paper, n) == (paper.default_stop(n), None)
