@@ -29,9 +29,12 @@ leg matrix when the configurations are many
    linear in targets x configurations x candidates (:func:`memory_estimate`).
 4. **A bound that stays valid** (:func:`bound_inputs`): the cheapest leg of each of the
    ``k_bound`` nearest pairs in task space, over the configurations of step 1 (so it
-   bounds the problem before step 2), and for every other pair a closed-form lower
-   bound (:func:`cartesian_leg_bound`) at the distance of the target's ``k_bound``-th
-   nearest neighbour, the input of :func:`subtask_opt.tour.sparse.one_tree_bound`.
+   bounds the problem before step 2), and for every other pair the larger of two lower
+   bounds: a closed-form one (:func:`cartesian_leg_bound`) at the distance of the
+   target's ``k_bound``-th nearest neighbour, and the leg time of the joint-space
+   distance from each of its configurations to the nearest configuration of any target
+   beyond those (:func:`far_joint_bound`); the input of
+   :func:`subtask_opt.tour.sparse.one_tree_bound`.
 """
 
 from __future__ import annotations
@@ -337,13 +340,105 @@ def _pair_minima(flat, offsets, ea, eb, limits):
     return out
 
 
+@njit(cache=True)
+def _far_scaled(dist, idx, owner, offsets, near):
+    """(N,) per target a the least Chebyshev distance (the query's metric) from one of
+    its configurations to a configuration of a target neither a nor among ``near[a]``:
+    the first such among each configuration's queried neighbours ``idx`` (nearest
+    first), or the last queried distance when all are a's or its near targets' (every
+    configuration not returned is at least that far); +inf when the query returned every
+    configuration and none qualifies."""
+    n = offsets.shape[0] - 1
+    m, k = idx.shape
+    mark = np.zeros(n, dtype=np.bool_)
+    out = np.full(n, np.inf)
+    for a in range(n):
+        mark[a] = True
+        for s in range(near.shape[1]):
+            mark[near[a, s]] = True
+        for r in range(offsets[a], offsets[a + 1]):
+            d = np.inf if k >= m else dist[r, k - 1]
+            for s in range(k):
+                if not mark[owner[idx[r, s]]]:
+                    d = dist[r, s]
+                    break
+            if d < out[a]:
+                out[a] = d
+        mark[a] = False
+        for s in range(near.shape[1]):
+            mark[near[a, s]] = False
+    return out
+
+
+@njit(cache=True)
+def _single_joint_times(ta, limits):
+    """(N,) the least leg time over joints j of a move of joint j alone by
+    ``ta[i] * acceleration[j]`` (so that its ``d_j / a_j`` is ``ta[i]``)."""
+    inv_v = 1.0 / limits.velocity
+    inv_a = 1.0 / limits.acceleration
+    inv_j = 1.0 / limits.jerk
+    nj = inv_v.shape[0]
+    q = np.zeros((2, nj))
+    out = np.empty(ta.shape[0])
+    for i in range(ta.shape[0]):
+        best = np.inf
+        if np.isfinite(ta[i]):
+            for j in range(nj):
+                q[1, :] = 0.0
+                q[1, j] = ta[i] * limits.acceleration[j]
+                v = _leg_time(q, 0, q, 1, inv_v, inv_a, inv_j)
+                if v < best:
+                    best = v
+        out[i] = best
+    return out
+
+
+FAR_QUERY = 16
+"""Nearest configurations (joint space) :func:`far_joint_bound` queries per configuration."""
+
+
+def far_joint_bound(flat: np.ndarray, offsets: np.ndarray, near: np.ndarray,
+                    limits: JointLimits, *, query: int = FAR_QUERY) -> np.ndarray:
+    """(N,) for each target a a lower bound on every leg between a configuration of a
+    and one of a target neither a nor in ``near[a]`` (N, k).
+
+    Why it is valid: the leg time depends on the joint distances d_j only through
+    quantities that never decrease when one d_j grows (module doc, step 1), so a leg is
+    at least the time of moving its joint j alone by d_j, for each j. Let ``D`` be the
+    least Chebyshev distance ``max_j d_j / a_j`` (``a`` the accelerations) between a's
+    configurations and those of the far targets (:func:`_far_scaled`, a k-d tree
+    query; a lower bound of it when none of the ``query`` nearest is far): every such
+    leg has a joint with ``d_j >= D a_j``, so it takes at least
+    ``min_j time(joint j alone by D a_j)``. ``D`` is shrunk by a relative 1e-9 for the
+    rounding of the scaled coordinates."""
+    from scipy.spatial import cKDTree
+
+    n = offsets.shape[0] - 1
+    m = flat.shape[0]
+    if n < 2 or m == 0:
+        return np.full(n, np.inf)
+    owner = np.repeat(np.arange(n, dtype=np.int64), np.diff(offsets))
+    scaled = np.ascontiguousarray(flat / limits.acceleration)
+    k = min(int(query), m)
+    dist, idx = cKDTree(scaled).query(scaled, k=k, p=np.inf)
+    dist = np.asarray(dist, dtype=np.float64).reshape(m, k)
+    idx = np.asarray(idx, dtype=np.int64).reshape(m, k)
+    far = _far_scaled(dist, idx, owner, offsets,
+                      np.ascontiguousarray(near, dtype=np.int64).reshape(n, -1))
+    far = np.maximum(far * (1.0 - 1e-9) - 1e-15, 0.0)
+    return _single_joint_times(far, limits)  # type: ignore[no-any-return]
+
+
 def bound_inputs(flat: np.ndarray, offsets: np.ndarray, points: np.ndarray,
                  home_legs: np.ndarray, limits: JointLimits, levers: np.ndarray | None, *,
                  k_bound: int = DEFAULT_K_BOUND, slack: float = 1e-5,
+                 far_query: int = FAR_QUERY,
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(edges, weights, rho, home) for :func:`~subtask_opt.tour.sparse.one_tree_bound`
     (step 4 of the module doc) over the configurations ``flat``; ``slack`` (m) how far a
-    configuration's tool point may be from its target's (the IK's tolerance, twice)."""
+    configuration's tool point may be from its target's (the IK's tolerance, twice);
+    ``far_query`` the joint-space neighbours :func:`far_joint_bound` queries (0: the
+    closed-form bound alone)."""
     n = offsets.shape[0] - 1
     k = min(k_bound, n - 1)
     home = np.minimum.reduceat(home_legs, offsets[:-1])
@@ -359,12 +454,14 @@ def bound_inputs(flat: np.ndarray, offsets: np.ndarray, points: np.ndarray,
     weights = _pair_minima(np.ascontiguousarray(flat), offsets, edges[:, 0].copy(),
                            edges[:, 1].copy(), limits)
     if k == n - 1:  # every pair is an edge: no other pair to bound
-        rho = np.full(n, np.inf)
-    elif levers is None:
-        rho = np.zeros(n)
-    else:  # every target beyond a's k nearest is at least this far from it
+        return edges, weights, np.full(n, np.inf), home
+    rho = np.zeros(n)
+    if levers is not None:  # every target beyond a's k nearest is at least this far from it
         far = np.asarray(dist, dtype=np.float64).reshape(n, k + 1)[:, k]
         rho = cartesian_leg_bound(far - 2 * slack, levers, limits)
+    if far_query > 0:  # a non-edge (a, b) has b beyond a's k nearest (and a beyond b's)
+        near = np.stack([row[row != i][:k] for i, row in enumerate(idx)])
+        rho = np.maximum(rho, far_joint_bound(flat, offsets, near, limits, query=far_query))
     return edges, weights, rho, home
 
 
@@ -392,7 +489,6 @@ def available_memory() -> int | None:
 
 
 __all__ = ["CONFIGURATION_BUDGET", "DEFAULT_CAP", "DEFAULT_K_BOUND", "DEFAULT_K_JOINT",
-           "DEFAULT_K_TASK",
-           "available_memory", "bound_inputs", "build_sparse", "cap_for", "cartesian_leg_bound",
-           "check_memory", "dominated", "keep_best", "memory_estimate", "nearest_targets",
-           "reach_levers"]
+           "DEFAULT_K_TASK", "FAR_QUERY", "available_memory", "bound_inputs", "build_sparse",
+           "cap_for", "cartesian_leg_bound", "check_memory", "dominated", "far_joint_bound",
+           "keep_best", "memory_estimate", "nearest_targets", "reach_levers"]

@@ -122,6 +122,70 @@ def test_bound_inputs_with_every_pair_known_bound_no_other_pair(ur10):
     assert np.all(np.isfinite(rho_few))
 
 
+@pytest.mark.parametrize("query", [1, 4, 10_000])
+def test_far_joint_bound_never_exceeds_a_far_leg(ur10, query):
+    """Brute force by joint_leg_times: every leg from a target's configurations to those
+    of a target beyond its k nearest is at least the target's far_joint_bound, whether
+    the query finds a far configuration (10,000: every one returned), falls back to its
+    last distance (1, 4) or not; and with every configuration queried the bound is the
+    least such leg's single-joint part, so no weaker than a fifth of the least far leg."""
+    flat, off, points = _solutions(ur10, 12, seed=4)
+    lim = _limits(ur10)
+    near = sl.nearest_targets(points, 3)
+    bound = sl.far_joint_bound(flat, off, near, lim, query=query)
+    n = off.shape[0] - 1
+    for a in range(n):
+        far = [b for b in range(n) if b != a and b not in near[a]]
+        least = min(joint_leg_times(flat[off[a]:off[a + 1]], flat[off[b]:off[b + 1]],
+                                    lim).min() for b in far)
+        assert bound[a] <= least * (1 + 1e-12)
+        if query >= flat.shape[0]:
+            assert bound[a] >= 0.2 * least
+
+
+def test_bound_inputs_rho_bounds_every_pair_that_is_not_an_edge(ur10):
+    """Brute force: with k_bound = 2, every pair of targets that is not an edge costs at
+    least (rho_a + rho_b) / 2, and the joint-space part makes rho no smaller than the
+    closed-form bound alone (far_query=0)."""
+    flat, off, points = _solutions(ur10, 12, seed=6)
+    lim = _limits(ur10)
+    home = joint_leg_times(HOME, flat, lim)[0]
+    levers = sl.reach_levers(ur10)
+    edges, _, rho, _ = sl.bound_inputs(flat, off, points, home, lim, levers, k_bound=2)
+    *_, rho_cart, _ = sl.bound_inputs(flat, off, points, home, lim, levers, k_bound=2,
+                                      far_query=0)
+    assert np.all(rho >= rho_cart) and np.any(rho > rho_cart)
+    known = {tuple(e) for e in edges.tolist()}
+    n = off.shape[0] - 1
+    for a in range(n):
+        for b in range(a + 1, n):
+            if (a, b) not in known:
+                block = joint_leg_times(flat[off[a]:off[a + 1]], flat[off[b]:off[b + 1]], lim)
+                assert block.min() >= 0.5 * (rho[a] + rho[b]) * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("seed", [7, 8, 9])
+def test_sparse_bound_stays_below_the_exact_optimum(ur10, seed):
+    """The 1-tree bound on bound_inputs with few exact pairs (k_bound = 2, so most pairs
+    take rho) never exceeds the exact optimum over every configuration (clustered
+    Held-Karp), and the joint-space part of rho never lowers it."""
+    from subtask_opt.tour.sparse import one_tree_bound
+
+    flat, off, points = _solutions(ur10, 9, seed=seed)
+    lim = _limits(ur10)
+    home = joint_leg_times(HOME, flat, lim)[0]
+    optimum = _optimum(flat, off, lim)
+    levers = sl.reach_levers(ur10)
+    n = off.shape[0] - 1
+    values = []
+    for far_query in (0, sl.FAR_QUERY):
+        edges, weights, rho, home_min = sl.bound_inputs(flat, off, points, home, lim, levers,
+                                                        k_bound=2, far_query=far_query)
+        values.append(one_tree_bound(n, edges, weights, rho, home_min, upper=optimum * 1.1))
+    assert 0 < values[0] <= values[1] * (1 + 1e-9)
+    assert values[1] <= optimum * (1 + 1e-9)
+
+
 def test_memory_check_refuses_before_work():
     with pytest.raises(ParameterError, match="GiB"):
         sl.check_memory(2**40, limit=2**30)
