@@ -121,6 +121,9 @@ class LazyLegsProblem:
         if not (math.isfinite(self.penalty) and self.penalty > 0):
             raise ParameterError(f"LazyLegsProblem.penalty must be a finite time > 0, got "
                                  f"{self.penalty!r}")
+        if self.verifier is not None and not isinstance(self.verifier, LegVerifier):
+            raise ParameterError(f"LazyLegsProblem.verifier must be a LegVerifier, got "
+                                 f"{self.verifier!r}")
         if (self.legs is None) == (self.sparse is None):
             raise ParameterError("LazyLegsProblem needs either dense legs or sparse ones")
         if self.sparse is not None:
@@ -137,10 +140,6 @@ class LazyLegsProblem:
                 or self.cheapest.shape != (n, m)):
             raise ParameterError(f"LazyLegsProblem.dist and cheapest must be ({n}, {n}) and "
                                  f"({n}, {m})")
-        if self.verifier is not None and not isinstance(self.verifier, LegVerifier):
-            raise ParameterError(f"LazyLegsProblem.verifier must be a LegVerifier, got "
-                                 f"{self.verifier!r}")
-
     @property
     def size(self) -> int:
         """Number of targets."""

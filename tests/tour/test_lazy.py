@@ -228,8 +228,9 @@ def test_bad_problems_and_options_are_refused():
     with pytest.raises(ParameterError, match="writable"):
         _dense(offsets, legs, home).__class__(offsets, home, PENALTY, legs=frozen,
                                                dist=np.zeros((4, 4)), cheapest=np.zeros((4, 8)))
-    with pytest.raises(ParameterError, match="verifier"):
-        _dense(offsets, legs, home, verifier=object())  # type: ignore[arg-type]
+    for build in (_dense, lambda *a, verifier: _sparse(*a, pts, verifier=verifier)):
+        with pytest.raises(ParameterError, match="verifier must be a LegVerifier"):
+            build(offsets, legs, home, verifier=object())
     dense = _dense(offsets, legs, home)
     with pytest.raises(ParameterError, match="home configuration"):
         solve(dense, constraints=TourConstraints(home=(0.0, 0.0)))
