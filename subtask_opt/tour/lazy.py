@@ -151,9 +151,13 @@ class LazyLegsProblem:
 
 
 MAX_ROUNDS = 200
-"""Most search rounds of the lazy leg check (GA searches on dense legs, rounds of the
-search on candidate legs): then the shortest verified answer stands, or with none
-:func:`solve_lazy` gives up (:class:`~subtask_opt.base.errors.NoPathError`)."""
+"""Most GA searches of the lazy leg check on dense legs: then the shortest verified answer
+stands, or with none :func:`solve_lazy` gives up
+(:class:`~subtask_opt.base.errors.NoPathError`)."""
+SPARSE_MAX_ROUNDS = 1000
+"""Most rounds of the search on candidate legs (the same rule). Most of them only polish
+(one decode and local search, O(N)); a cluttered 8-hole cell (``tests/cell/test_cells.py``,
+216 of 290 legs checked in collision) takes 262."""
 MAX_REPAIRS = 100
 """Most repair rounds in a row before :func:`solve_lazy` runs the GA again."""
 LAZY_KICKS = 100
@@ -762,9 +766,9 @@ def _sparse_search(problem: LazyLegsProblem, seed: int, stop: Any, params: Solve
             # stands)
             final = not repair
             finals += final
-            if rounds >= MAX_ROUNDS and best is not None:
+            if rounds >= SPARSE_MAX_ROUNDS and best is not None:
                 break  # the shortest verified tour stands
-            if rounds >= MAX_ROUNDS:
+            if rounds >= SPARSE_MAX_ROUNDS:
                 raise NoPathError(f"legs in collision still in the best tour after {rounds} "
                                   "searches")
     cpu["search"] += time.process_time() - t0 - compiled[0]
