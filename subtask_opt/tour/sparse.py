@@ -551,17 +551,17 @@ def _stretch(tour, data, choice, i, j):
 DECODE_MARGIN = 8
 """Positions either side of a kick's window that its local decode re-chooses."""
 WALK_SLACK = 0.002
-"""A kicked tour replaces the walk's current one when shorter, or when at most a random
-share in [0, WALK_SLACK * min(1, SLACK_TARGETS / N)) longer than the best (the walk leaves
-a local optimum). A kick changes a few legs of a long tour, so a share of the whole tour's
-time lets the walk drift far from its best: 0.002 at every size left the 2,000-hole panel
-(20 kicks per target, three seeds) 0.6-0.7% longer than no slack, the 5,000-hole one 1.0%;
-no slack at all left a cluttered 8-hole cell (``tests/cell/test_cells.py``) at a tour
-without detours, 4% longer than with them. Hence a slack that shrinks with the targets:
-with SLACK_TARGETS 25 / 50 / 100 / 250 the 2,000-hole panel (seed 0) ended at 318.08 /
-317.64 / 318.89 / 319.33 s (no slack: 319.16 s)."""
-SLACK_TARGETS = 50
-"""Targets up to which the walk's slack is the whole :data:`WALK_SLACK`."""
+"""Up to :data:`SLACK_TARGETS` targets, a kicked tour replaces the walk's current one when
+shorter or when at most a random share in [0, WALK_SLACK) longer than the best (the walk
+leaves a local optimum); above, only when shorter. Without it a cluttered 8-hole cell
+(``tests/cell/test_cells.py``, three quarters of its legs in collision) ended at a tour
+without its detours, 4% longer. On long tours a kick changes a few legs, so a share of the
+whole tour's time lets the walk drift far from its best: 0.002 at every size left the
+2,000-hole panel (20 kicks per target, three seeds) 0.6-0.7% longer than none, the
+5,000-hole one 1.0%; a share shrinking as 50 / N was 0.5% shorter at 2,000 holes but 0.7%
+longer at 5,000 and 0.6-4% longer on RoboTSP's subsets (one seed each)."""
+SLACK_TARGETS = 16
+"""Most targets for which the walk takes :data:`WALK_SLACK`."""
 
 
 def _walk(tour: np.ndarray, data: SparseLegs, choice: np.ndarray,
@@ -588,7 +588,7 @@ def _walk(tour: np.ndarray, data: SparseLegs, choice: np.ndarray,
     trial, tpos, tchoice = tour.copy(), pos.copy(), choice.copy()
     active[:] = False
     w = min(window, n)
-    slack = WALK_SLACK * min(1.0, SLACK_TARGETS / n)
+    slack = WALK_SLACK if n <= SLACK_TARGETS else 0.0
     for _ in range(kicks):
         trial[:] = cur
         tpos[:] = cpos
