@@ -394,10 +394,24 @@ class _Runner:
         from distributed import Client, LocalCluster
 
         # dashboard on a free port: the scheduler's HTTP server starts anyway, 8787 may be taken
-        with LocalCluster(n_workers=min(workers, len(self.items)), threads_per_worker=1,
-                          processes=True, dashboard_address=":0",
-                          silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
-            self.submit_all(client)
+        saved: dict[str, int] = {}
+        try:
+            with LocalCluster(n_workers=min(workers, len(self.items)), threads_per_worker=1,
+                              processes=True, dashboard_address=":0",
+                              silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+                try:
+                    self.submit_all(client)
+                except BaseException:
+                    # Ctrl-C or a raised job: the cluster closes with tasks running, and its
+                    # nannies log the cancelled ones as errors (tracebacks on stderr)
+                    for name in [n for n in logging.root.manager.loggerDict
+                                 if n.split(".")[0] == "distributed"] + ["distributed"]:
+                        saved[name] = logging.getLogger(name).level
+                        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+                    raise
+        finally:
+            for name, level in saved.items():
+                logging.getLogger(name).setLevel(level)
 
     def on_dask(self, scheduler: Any) -> None:
         if not dask_available():
