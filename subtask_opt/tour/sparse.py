@@ -13,8 +13,9 @@ a free slot), whose block of leg times starts at ``legs[start[a, s]]`` (row-majo
 a's configurations the rows); ``home`` (M,) the leg between the home and each
 configuration (legs are symmetric: the same either way). A leg between two targets
 that are not candidates of each other costs ``penalty`` (more than any tour of
-stored legs): the search never needs one, and when its answer holds one the caller
-adds the pair's block (:meth:`SparseLegs.with_pairs`, "the legs the search asks
+stored legs) plus the targets' distance (``coords``): the search needs as few as it
+can and keeps those it needs short, and when its answer holds one the caller
+adds the pair's block (``LazyLegsProblem.extend``, "the legs the search asks
 for") and searches again.
 
 :func:`search` is an iterated local search, seeded: nearest-neighbour construction
@@ -51,8 +52,10 @@ class SparseLegs(NamedTuple):
         legs: (L,) float64 leg times of every block.
         home: (M,) float64 time between the home and each configuration.
         coords: (N, d) float64 target coordinates (the construction's fallback when
-            every candidate of a target is visited: the nearest unvisited by these).
-        penalty: the time of a leg not stored (more than any tour of stored legs).
+            every candidate of a target is visited: the nearest unvisited by these; the
+            length of a jump between targets that are not candidates).
+        penalty: the time of a leg not stored, plus its jump's length (more than any
+            tour of stored legs).
     """
 
     offsets: np.ndarray
@@ -89,12 +92,26 @@ def _slot(data, a, b):
 
 
 @njit(cache=True)
+def _missing(data, a, b):
+    """Time the search gives a leg between targets a and b that is not stored: the penalty
+    plus their distance (``coords``), so that of tours with as many such legs the search
+    keeps the one whose jumps are shortest: their true legs, added afterwards, are then
+    short too (with the penalty alone it keeps any, and a jump across a 2,000-hole panel
+    stays in the tour)."""
+    d = 0.0
+    for j in range(data.coords.shape[1]):
+        x = data.coords[a, j] - data.coords[b, j]
+        d += x * x
+    return data.penalty + math.sqrt(d)
+
+
+@njit(cache=True)
 def leg(data, a, ca, b, cb):
     """Time from configuration ca (index within target a) to cb of target b; a or b equal
     to N is the home (its configuration index ignored)."""
     n = data.offsets.shape[0] - 1
     off = data.offsets
-    out = data.penalty
+    out = 0.0
     if a == n and b == n:
         out = 0.0
     elif a == n:
@@ -106,6 +123,8 @@ def leg(data, a, ca, b, cb):
         if s >= 0:
             kb = off[b + 1] - off[b]
             out = data.legs[data.start[a, s] + ca * kb + cb]
+        else:
+            out = _missing(data, a, b)
     return out
 
 
@@ -132,6 +151,7 @@ def decode(tour, data, choice):
         ka = off[a + 1] - off[a]
         kb = off[b + 1] - off[b]
         s = _slot(data, a, b)
+        jump = _missing(data, a, b) if s < 0 else 0.0
         for cb in range(kb):
             best = np.inf
             arg = 0
@@ -139,7 +159,7 @@ def decode(tour, data, choice):
                 if s >= 0:
                     v = cost[ca] + data.legs[data.start[a, s] + ca * kb + cb]
                 else:
-                    v = cost[ca] + data.penalty
+                    v = cost[ca] + jump
                 if v < best:
                     best = v
                     arg = ca
@@ -504,6 +524,7 @@ def _decode_window(tour, data, choice, i, j):
         ku = off[u + 1] - off[u]
         kv = off[v + 1] - off[v]
         s = _slot(data, u, v)
+        jump = _missing(data, u, v) if s < 0 else 0.0
         for cv in range(kv):
             best = np.inf
             arg = 0
@@ -511,7 +532,7 @@ def _decode_window(tour, data, choice, i, j):
                 if s >= 0:
                     x = cost[cu] + data.legs[data.start[u, s] + cu * kv + cv]
                 else:
-                    x = cost[cu] + data.penalty
+                    x = cost[cu] + jump
                 if x < best:
                     best = x
                     arg = cu

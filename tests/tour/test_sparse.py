@@ -164,3 +164,37 @@ def test_bad_inputs_are_refused():
                           upper=float("nan"))
     with pytest.raises(ParameterError, match="weights"):
         ts.one_tree_bound(6, np.zeros((2, 2)), np.zeros(1), np.zeros(6), np.ones(6), upper=1.0)
+
+
+def test_jumps_between_targets_that_are_not_candidates_are_kept_short():
+    """Two rows of targets, legs stored only within a row: a tour must jump between the
+    rows twice. A leg not stored costs the penalty plus the targets' distance, so the
+    search ends where the branch and cut on those times does (both jumps between the
+    rows' nearest ends), not with any two jumps."""
+    k_conf = 2
+    data, full, home, pos, pts, _ = _instance(3, 10, k_conf, 9)
+    pts = np.array([[x, y] for y in (0.0, 3.0) for x in np.linspace(0.0, 2.0, 5)])
+    rng = np.random.default_rng(3)
+    pos = np.repeat(pts, k_conf, axis=0) + rng.uniform(-0.1, 0.1, (10 * k_conf, 2))
+    full = np.linalg.norm(pos[:, None] - pos[None], axis=2)
+    home = np.linalg.norm(pos - np.array([1.0, 1.5]), axis=1)
+    row = np.arange(10) // 5
+    nbr = np.array([[b for b in range(10) if b != a and row[b] == row[a]] for a in range(10)])
+    start = np.arange(10 * 4).reshape(10, 4) * k_conf * k_conf
+    off = data.offsets
+    legs = np.concatenate([full[off[a]:off[a + 1], off[b]:off[b + 1]].ravel()
+                           for a in range(10) for b in nbr[a]])
+    sparse = ts.SparseLegs(off, nbr, start, legs, home, pts, 1e3)
+    jump = 1e3 + np.linalg.norm(pts[:, None] - pts[None], axis=2)
+    graded = full.copy()
+    for a in range(10):
+        for b in range(10):
+            if row[a] != row[b]:
+                graded[off[a]:off[a + 1], off[b]:off[b + 1]] = jump[a, b]
+    assert ts.leg(sparse, 0, 1, 9, 0) == pytest.approx(jump[0, 9], rel=1e-12)
+    out = ts.search(sparse, seed=0, kicks=300)
+    assert out.cost == pytest.approx(_exact(graded, home, 10, k_conf), rel=1e-9)
+    crossings = [(a, b) for a, b in zip(out.tour[1:-2], out.tour[2:-1], strict=True)
+                 if row[a] != row[b]]
+    assert len(crossings) == 1  # the other crossing goes through the home
+    assert pts[crossings[0][0]][0] == pts[crossings[0][1]][0]  # straight across
