@@ -167,12 +167,11 @@ def test_bad_inputs_are_refused():
 
 
 def test_jumps_between_targets_that_are_not_candidates_are_kept_short():
-    """Two rows of targets, legs stored only within a row: a tour must jump between the
-    rows twice. A leg not stored costs the penalty plus the targets' distance, so the
-    search ends where the branch and cut on those times does (both jumps between the
-    rows' nearest ends), not with any two jumps."""
+    """Two rows of targets, legs stored only within a row: a tour crosses between the
+    rows once through the home and once by a leg that is not stored. That leg costs the
+    penalty plus the targets' distance, so the search ends where the branch and cut on
+    those times does (straight across), not with any crossing."""
     k_conf = 2
-    data, full, home, pos, pts, _ = _instance(3, 10, k_conf, 9)
     pts = np.array([[x, y] for y in (0.0, 3.0) for x in np.linspace(0.0, 2.0, 5)])
     rng = np.random.default_rng(3)
     pos = np.repeat(pts, k_conf, axis=0) + rng.uniform(-0.1, 0.1, (10 * k_conf, 2))
@@ -181,7 +180,7 @@ def test_jumps_between_targets_that_are_not_candidates_are_kept_short():
     row = np.arange(10) // 5
     nbr = np.array([[b for b in range(10) if b != a and row[b] == row[a]] for a in range(10)])
     start = np.arange(10 * 4).reshape(10, 4) * k_conf * k_conf
-    off = data.offsets
+    off = np.arange(0, 10 * k_conf + 1, k_conf, dtype=np.int64)
     legs = np.concatenate([full[off[a]:off[a + 1], off[b]:off[b + 1]].ravel()
                            for a in range(10) for b in nbr[a]])
     sparse = ts.SparseLegs(off, nbr, start, legs, home, pts, 1e3)
