@@ -111,14 +111,12 @@ def leg(data, a, ca, b, cb):
     to N is the home (its configuration index ignored)."""
     n = data.offsets.shape[0] - 1
     off = data.offsets
-    out = 0.0
-    if a == n and b == n:
-        out = 0.0
-    elif a == n:
+    out = 0.0  # the home to itself
+    if a == n and b < n:
         out = data.home[off[b] + cb]
-    elif b == n:
+    elif b == n and a < n:
         out = data.home[off[a] + ca]
-    else:
+    elif a < n:
         s = _slot(data, a, b)
         if s >= 0:
             kb = off[b + 1] - off[b]
