@@ -23,10 +23,8 @@ over the candidates, then rounds of (1) the exact configurations of the order (t
 layered shortest path of :func:`decode`), (2) 2-opt moves between candidate
 neighbours with the configurations fixed, until neither improves; then local
 double-bridge kicks, each polished the same way and kept when the tour gets shorter.
-(An Or-opt pass with configuration-choosing relocations sat after the 2-opt, but the
-don't-look bits it shared were all cleared by the 2-opt: it never moved a target, and
-made to run it cost 2,000 holes about 15 times the CPU for 0.1-0.3% shorter
-tours; it was removed.)
+No Or-opt pass: relocations that choose the moved target's configuration cost about
+15 times the CPU at 2,000 holes for 0.1-0.3% shorter tours.
 
 :func:`one_tree_bound` is a Held-Karp (1-tree, subgradient) lower bound on a complete
 graph of which only some edges are known exactly: every other pair (a, b) must cost
